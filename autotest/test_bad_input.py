@@ -1,0 +1,244 @@
+"""Bad inputs (refused with a clear message naming the input and the
+problem) and odd-but-valid inputs (handled: no crash, valid output)."""
+
+import os
+
+import pytest
+from osgeo import gdal
+
+import oracle
+import scenes
+
+CRS_WORDS = ('crs', 'srs', 'spatial reference', 'coordinate', 'projection')
+NONFINITE_WORDS = ('nan', 'finite', 'infinit')
+
+
+def assert_refused(wm, options, path='WATERMESH:', all_of=(), any_of=(), flags=gdal.OF_VECTOR):
+    """Open must fail; the message must contain every string of all_of and
+    at least one of any_of (case-insensitive). Returns the message."""
+    ds, cap = wm.open(options, path=path, flags=flags, any_driver=(path != 'WATERMESH:'))
+    msg = cap.text or gdal.GetLastErrorMsg()
+    assert ds is None, 'bad input accepted: %s %s (messages: %r)' % (path, options, msg)
+    assert msg.strip(), 'no error message for %s %s' % (path, options)
+    low = msg.lower()
+    for s in all_of:
+        assert s.lower() in low, '%r not in the error message %r' % (s, msg)
+    if any_of:
+        assert any(s.lower() in low for s in any_of), 'none of %r in the error message %r' % (any_of, msg)
+    return msg
+
+
+# ----------------------------------------------------------------------------
+# bad inputs
+# ----------------------------------------------------------------------------
+
+def test_missing_rivers_datasource(wm, tmp_dir):
+    p = os.path.join(tmp_dir, 'no_such_rivers.gpkg')
+    assert_refused(wm, {'RIVERS': p}, all_of=['no_such_rivers.gpkg'])
+
+
+def test_missing_lakes_datasource(wm, simple_options, tmp_dir):
+    p = os.path.join(tmp_dir, 'no_such_lakes.gpkg')
+    assert_refused(wm, dict(simple_options, LAKES=p), all_of=['no_such_lakes.gpkg'])
+
+
+def test_unreadable_datasource(wm, tmp_dir):
+    p = os.path.join(tmp_dir, 'garbage_rivers.gpkg')
+    with open(p, 'w') as f:
+        f.write('this is not a GeoPackage\n' * 10)
+    assert_refused(wm, {'RIVERS': p}, all_of=['garbage_rivers.gpkg'])
+
+
+def test_directory_as_datasource(wm, tmp_dir):
+    d = os.path.join(tmp_dir, 'empty_dir_rivers')
+    os.mkdir(d)
+    assert_refused(wm, {'RIVERS': d}, all_of=['empty_dir_rivers'])
+
+
+def test_missing_rivers_layer(wm, simple_options):
+    assert_refused(wm, dict(simple_options, RIVERS_LAYER='no_such_layer_r'), all_of=['no_such_layer_r'])
+
+
+def test_missing_lakes_layer(wm, simple_options):
+    assert_refused(wm, dict(simple_options, LAKES_LAYER='no_such_layer_l'), all_of=['no_such_layer_l'])
+
+
+def test_point_rivers(wm, tmp_dir):
+    p = scenes.make_bad_scene(os.path.join(tmp_dir, 'point_rivers.gpkg'), 'points')
+    assert_refused(wm, {'RIVERS': p, 'RIVERS_LAYER': 'rivers'}, all_of=['point'],
+                   any_of=['point_rivers.gpkg', 'rivers'])
+
+
+def test_polygons_as_rivers(wm, simple_scene):
+    assert_refused(wm, {'RIVERS': simple_scene, 'RIVERS_LAYER': 'lakes'}, all_of=['polygon'],
+                   any_of=[os.path.basename(simple_scene), 'lakes'])
+
+
+def test_no_crs_refused(wm, tmp_dir):
+    p = scenes.make_bad_scene(os.path.join(tmp_dir, 'no_crs_rivers.shp'), 'no_crs')
+    msg = assert_refused(wm, {'RIVERS': p}, any_of=CRS_WORDS)
+    assert 'no_crs_rivers' in msg, msg
+
+
+def test_no_crs_accepted_with_target_srs(wm, tmp_dir):
+    p = scenes.make_bad_scene(os.path.join(tmp_dir, 'no_crs_rivers.shp'), 'no_crs')
+    o = {'RIVERS': p, 'TARGET_SRS': 'EPSG:32631', 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512}
+    res = wm.run(o)
+    assert res.water
+    problems = oracle.check_water(res.water, 512)
+    assert not problems, '\n'.join(problems[:10])
+    # 300 m x 10 m river with round caps
+    a = oracle.total_area(res.water)
+    want = 300 * 10 + 3.14159 * 25
+    assert abs(a - want) < 0.02 * want, (a, want)
+
+
+@pytest.mark.parametrize('kind', ['nan', 'inf'])
+def test_nonfinite_river_coordinates(wm, tmp_dir, kind):
+    p = scenes.make_bad_scene(os.path.join(tmp_dir, '%s_rivers.gpkg' % kind), kind)
+    assert_refused(wm, {'RIVERS': p, 'RIVERS_LAYER': 'rivers', 'LAKES': p, 'LAKES_LAYER': 'lakes'},
+                   all_of=['77'], any_of=NONFINITE_WORDS)
+
+
+def test_nonfinite_lake_coordinates(wm, tmp_dir):
+    p = scenes.make_bad_scene(os.path.join(tmp_dir, 'nan_lakes.gpkg'), 'lake_nan')
+    assert_refused(wm, {'RIVERS': p, 'RIVERS_LAYER': 'rivers', 'LAKES': p, 'LAKES_LAYER': 'lakes'},
+                   all_of=['78'], any_of=NONFINITE_WORDS)
+
+
+@pytest.mark.parametrize('value', ['0', '-1'])
+def test_pixel_size_not_positive(wm, simple_options, value):
+    assert_refused(wm, dict(simple_options, PIXEL_SIZE=value), all_of=['PIXEL_SIZE'])
+
+
+def test_block_size_not_multiple_of_pixel_size(wm, simple_options):
+    assert_refused(wm, dict(simple_options, PIXEL_SIZE=3, BLOCK_SIZE=1000), all_of=['BLOCK_SIZE'])
+
+
+def test_block_too_large_for_memory(wm, simple_options):
+    assert_refused(wm, dict(simple_options, PIXEL_SIZE=0.5, BLOCK_SIZE=1000000000),
+                   any_of=['BLOCK_SIZE', 'memory'])
+
+
+def test_block_too_large_raster(wm, simple_options):
+    assert_refused(wm, dict(simple_options, PIXEL_SIZE=0.5, BLOCK_SIZE=1000000000),
+                   any_of=['BLOCK_SIZE', 'memory'], flags=gdal.OF_RASTER)
+
+
+def test_neither_rivers_nor_lakes(wm):
+    assert_refused(wm, {'WIDTH': 5}, all_of=['RIVERS', 'LAKES'])
+
+
+def test_neither_rivers_nor_lakes_in_descriptor(wm, tmp_dir):
+    desc = scenes.write_descriptor(os.path.join(tmp_dir, 'nothing.watermesh'), WIDTH=5)
+    assert_refused(wm, {}, path=desc, all_of=['RIVERS', 'LAKES'])
+
+
+@pytest.mark.parametrize('text', [
+    '<WaterMesh><RIVERS>x.gpkg</RIVERS>',            # truncated
+    '<WaterMesh><RIVERS>x.gpkg</LAKES></WaterMesh>',  # mismatched tags
+    '<WaterMesh><RIVERS>x.gpkg</RIVERS><WaterMesh>',  # unclosed root
+])
+def test_malformed_descriptor(wm, tmp_dir, text):
+    desc = os.path.join(tmp_dir, 'malformed_scene.watermesh')
+    with open(desc, 'w') as f:
+        f.write(text)
+    assert_refused(wm, {}, path=desc, any_of=['malformed_scene.watermesh', 'xml'])
+
+
+def test_descriptor_missing_datasource(wm, tmp_dir):
+    desc = scenes.write_descriptor(os.path.join(tmp_dir, 'scene.watermesh'),
+                                   RIVERS='missing_relative_rivers.gpkg')
+    assert_refused(wm, {}, path=desc, all_of=['missing_relative_rivers.gpkg'])
+
+
+# the same refusals through the CLI: non-zero exit, ERROR on stderr, no dst
+def _cli_case(case, tmp_dir, simple_scene):
+    if case == 'missing_datasource':
+        return ['-rivers', os.path.join(tmp_dir, 'no_such_rivers.gpkg')], 'no_such_rivers.gpkg'
+    if case == 'missing_layer':
+        return ['-rivers', simple_scene, '-rivers_layer', 'no_such_layer_r'], 'no_such_layer_r'
+    if case == 'pixel_size':
+        return ['-rivers', simple_scene, '-rivers_layer', 'rivers', '-pixel_size', '0'], 'PIXEL_SIZE'
+    if case == 'block_size':
+        return ['-rivers', simple_scene, '-rivers_layer', 'rivers', '-pixel_size', '3',
+                '-block_size', '1000'], 'BLOCK_SIZE'
+    if case == 'polygons_as_rivers':
+        return ['-rivers', simple_scene, '-rivers_layer', 'lakes'], 'polygon'
+    if case == 'nan':
+        p = scenes.make_bad_scene(os.path.join(tmp_dir, 'nan_rivers.gpkg'), 'nan')
+        return ['-rivers', p, '-rivers_layer', 'rivers'], '77'
+    if case == 'neither':
+        return ['-width', '5'], 'LAKES'
+    raise ValueError(case)
+
+
+@pytest.mark.parametrize('case', ['missing_datasource', 'missing_layer', 'pixel_size', 'block_size',
+                                  'polygons_as_rivers', 'nan', 'neither'])
+def test_cli_refuses(wm, tmp_dir, simple_scene, case):
+    args, token = _cli_case(case, tmp_dir, simple_scene)
+    out_dir = os.path.join(tmp_dir, 'out')
+    os.mkdir(out_dir)
+    dst = os.path.join(out_dir, 'out.gpkg')
+    p = wm.cli(args + [dst])
+    assert p.returncode != 0, 'exit 0 for %s: %s' % (case, p.stdout)
+    assert 'ERROR' in p.stderr, p.stderr
+    assert token.lower() in p.stderr.lower(), '%r not in %r' % (token, p.stderr)
+    assert os.listdir(out_dir) == [], 'left behind: %s' % os.listdir(out_dir)
+
+
+# ----------------------------------------------------------------------------
+# odd but valid inputs
+# ----------------------------------------------------------------------------
+
+ODD_AREA_TOL = {'curves': 0.03}
+
+
+def assert_valid_run(wm, options, block_size, area_rel):
+    res = wm.run(options)
+    assert res.water, 'no water output'
+    problems = oracle.check_water(res.water, block_size)
+    assert not problems, '\n'.join(problems[:10])
+    problems, _ = oracle.check_mesh(res.mesh, res.water, block_size)
+    assert not problems, '\n'.join(problems[:10])
+    tj, gaps, details = oracle.check_seams(res.water, block_size)
+    assert (tj, gaps) == (0, 0), '\n'.join(details[:10])
+    tj, gaps, details = oracle.check_seams(res.mesh, block_size)
+    assert (tj, gaps) == (0, 0), '\n'.join(details[:10])
+    got = oracle.total_area(res.water)
+    want = oracle.water_area(options)
+    assert abs(got - want) <= area_rel * want, \
+        'area %.1f vs oracle %.1f (rel %.4f)' % (got, want, (got - want) / want)
+    return res
+
+
+@pytest.mark.parametrize('kind', scenes.ODD_KINDS)
+def test_odd_input(wm, tmp_dir, kind):
+    p = scenes.make_odd_scene(os.path.join(tmp_dir, '%s.gpkg' % kind), kind)
+    o = {'RIVERS': p, 'RIVERS_LAYER': 'rivers', 'LAKES': p, 'LAKES_LAYER': 'lakes',
+         'WIDTH_FIELD': 'width', 'PIXEL_SIZE': 0.5, 'BLOCK_SIZE': 256}
+    assert_valid_run(wm, o, 256, ODD_AREA_TOL.get(kind, 0.015))
+
+
+def test_zero_length_river_warns(wm, tmp_dir):
+    p = scenes.make_odd_scene(os.path.join(tmp_dir, 'zero.gpkg'), 'zero_length')
+    o = {'RIVERS': p, 'RIVERS_LAYER': 'rivers', 'WIDTH_FIELD': 'width', 'PIXEL_SIZE': 0.5, 'BLOCK_SIZE': 256}
+    res = wm.run(o)
+    assert res.cap.warnings, 'no warning for the zero-length rivers'
+    # skipped, not drawn as a disc
+    x, y = scenes.xy(400, 500)
+    from shapely.geometry import Point
+    assert not any(f.geom.intersects(Point(x, y).buffer(5)) for f in res.water)
+
+
+def test_rivers_and_lakes_in_different_crs(wm, tmp_dir):
+    rp, lp = scenes.make_mixed_crs_scene(os.path.join(tmp_dir, 'mixed_rivers.gpkg'),
+                                         os.path.join(tmp_dir, 'mixed_lakes.gpkg'))
+    o = {'RIVERS': rp, 'LAKES': lp, 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512}
+    res = assert_valid_run(wm, o, 512, 0.01)
+    ref = scenes.srs_from(scenes.SCENE_EPSG)
+    assert res.srs is not None and res.srs.IsSame(ref)
+    # the reprojected lake L2 is there
+    from shapely.geometry import Point
+    x, y = scenes.xy(225, 540)
+    assert any(f.geom.contains(Point(x, y)) for f in res.water)

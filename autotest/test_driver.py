@@ -1,0 +1,626 @@
+"""WATERMESH driver: metadata, opening, layers, every open option, the
+descriptor file, the raster view and the spatial filter."""
+
+import math
+import os
+import shutil
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+from osgeo import gdal, ogr, osr
+
+import oracle
+import scenes
+
+ALL_OPTIONS = ('RIVERS', 'RIVERS_LAYER', 'RIVERS_WHERE', 'LAKES', 'LAKES_LAYER',
+               'LAKES_WHERE', 'WIDTH', 'WIDTH_FIELD', 'PIXEL_SIZE', 'BLOCK_SIZE',
+               'SIMPLIFY', 'METHOD', 'DEVICE', 'NUM_THREADS', 'TARGET_SRS')
+
+AREA_REL_TOL = 0.01  # driver water area vs oracle on the small hand-made scene
+
+
+def with_(base, **kw):
+    """Copy of an options dict with changes (None removes an option)."""
+    o = dict(base)
+    for k, v in kw.items():
+        if v is None:
+            o.pop(k.upper(), None)
+        else:
+            o[k.upper()] = v
+    return o
+
+
+def assert_area_close(wm, res, options, rel=AREA_REL_TOL):
+    """Total water area of a run within rel of the oracle's; returns it."""
+    got = oracle.total_area(res.water)
+    want = oracle.water_area(options)
+    assert want > 0
+    assert abs(got - want) <= rel * want, \
+        'water area %.1f m2 vs oracle %.1f m2 (rel %.4f > %.4f) for %s' % (
+            got, want, (got - want) / want, rel, options)
+    return got
+
+
+def srs_is(srs, crs):
+    """srs (osr or None) is the same CRS as crs (EPSG code or string)."""
+    return srs is not None and srs.IsSame(scenes.srs_from(crs)) == 1
+
+
+# a transverse Mercator centred on the simple scene: scale ~1 there, so the
+# width of a river is the same in it and in UTM
+LOCAL_TMERC = '+proj=tmerc +lat_0=42.45 +lon_0=1.8 +k=1 +x_0=0 +y_0=0 +datum=WGS84 +units=m +no_defs'
+
+
+# ----------------------------------------------------------------------------
+# driver metadata
+# ----------------------------------------------------------------------------
+
+@pytest.fixture(scope='module')
+def driver(wm):
+    drv = gdal.GetDriverByName(wm.DRIVER_NAME)
+    assert drv is not None, 'WATERMESH driver not registered'
+    return drv
+
+
+def test_driver_capabilities(driver):
+    assert driver.GetMetadataItem(gdal.DCAP_RASTER) == 'YES'
+    assert driver.GetMetadataItem(gdal.DCAP_VECTOR) == 'YES'
+
+
+def test_driver_extensions(driver):
+    exts = (driver.GetMetadataItem(gdal.DMD_EXTENSIONS) or '').lower().split()
+    assert 'watermesh' in exts, 'DMD_EXTENSIONS = %r' % exts
+
+
+def test_driver_connection_prefix(driver):
+    assert driver.GetMetadataItem(gdal.DMD_CONNECTION_PREFIX) == 'WATERMESH:'
+
+
+def test_driver_open_option_list(driver):
+    xml = driver.GetMetadataItem(gdal.DMD_OPENOPTIONLIST)
+    assert xml, 'no DMD_OPENOPTIONLIST'
+    root = ET.fromstring(xml)
+    names = {o.get('name', '').upper() for o in root.iter('Option')}
+    missing = [n for n in ALL_OPTIONS if n not in names]
+    assert not missing, 'options missing from DMD_OPENOPTIONLIST: %s' % missing
+
+
+# ----------------------------------------------------------------------------
+# opening, layers
+# ----------------------------------------------------------------------------
+
+def test_open_connection_string(wm, simple_options):
+    ds, cap = wm.open(simple_options)
+    assert ds is not None, cap.text
+    names = [ds.GetLayer(i).GetName() for i in range(ds.GetLayerCount())]
+    assert sorted(names) == ['mesh', 'water'], names
+
+
+def field_types(lyr):
+    d = lyr.GetLayerDefn()
+    return {d.GetFieldDefn(i).GetName(): d.GetFieldDefn(i).GetType() for i in range(d.GetFieldCount())}
+
+
+def test_water_layer_schema(wm, simple_options):
+    ds, cap = wm.open(simple_options)
+    assert ds is not None, cap.text
+    lyr = ds.GetLayerByName('water')
+    assert ogr.GT_Flatten(lyr.GetGeomType()) == ogr.wkbPolygon, ogr.GeometryTypeToName(lyr.GetGeomType())
+    ft = field_types(lyr)
+    assert ft.get('block_x') == ogr.OFTInteger, ft
+    assert ft.get('block_y') == ogr.OFTInteger, ft
+    assert ft.get('area') == ogr.OFTReal, ft
+
+
+def test_mesh_layer_schema(wm, simple_options):
+    ds, cap = wm.open(simple_options)
+    assert ds is not None, cap.text
+    lyr = ds.GetLayerByName('mesh')
+    assert ogr.GT_Flatten(lyr.GetGeomType()) == ogr.wkbMultiPolygon, ogr.GeometryTypeToName(lyr.GetGeomType())
+    ft = field_types(lyr)
+    assert ft.get('block_x') == ogr.OFTInteger, ft
+    assert ft.get('block_y') == ogr.OFTInteger, ft
+    assert ft.get('triangles') == ogr.OFTInteger, ft
+
+
+def test_layer_srs_is_rivers_crs(wm, simple_options):
+    res = wm.run(simple_options)
+    assert srs_is(res.srs, scenes.SCENE_EPSG), res.srs.ExportToWkt() if res.srs else None
+
+
+def test_simple_scene_output(wm, simple_options):
+    res = wm.run(simple_options)
+    B = simple_options['BLOCK_SIZE']
+    assert res.water and res.mesh
+    problems = oracle.check_water(res.water, B)
+    assert not problems, '\n'.join(problems[:10])
+    problems, stats = oracle.check_mesh(res.mesh, res.water, B)
+    assert not problems, '\n'.join(problems[:10])
+    tj, gaps, details = oracle.check_seams(res.water, B)
+    assert (tj, gaps) == (0, 0), '\n'.join(details[:10])
+    assert_area_close(wm, res, simple_options)
+
+
+def test_feature_order_deterministic(wm, simple_options):
+    a = wm.run(simple_options)
+    b = wm.run(simple_options)
+    assert a.signature() == b.signature(), 'two runs gave different features/order'
+    for feats in (a.water, a.mesh):
+        seen, last = set(), None
+        for f in feats:
+            if f.block != last:
+                assert f.block not in seen, 'features of block %s are not contiguous' % (f.block,)
+                seen.add(f.block)
+                last = f.block
+
+
+def test_vector_open_has_no_bands(wm, simple_options):
+    ds, cap = wm.open(simple_options, flags=gdal.OF_VECTOR)
+    assert ds is not None, cap.text
+    assert ds.RasterCount == 0
+    assert ds.GetLayerCount() == 2
+
+
+def test_raster_open_has_no_layers(wm, simple_options):
+    ds, cap = wm.open(simple_options, flags=gdal.OF_RASTER)
+    assert ds is not None, cap.text
+    assert ds.GetLayerCount() == 0
+    assert ds.RasterCount >= 1
+
+
+# ----------------------------------------------------------------------------
+# each open option has an effect
+# ----------------------------------------------------------------------------
+
+def test_width_default_is_10(wm, simple_options):
+    a = wm.run(with_(simple_options, WIDTH=None))
+    b = wm.run(with_(simple_options, WIDTH=10))
+    assert a.signature() == b.signature()
+
+
+def test_width_changes_area(wm, simple_options):
+    o10, o20 = with_(simple_options, WIDTH=10), with_(simple_options, WIDTH=20)
+    a10 = assert_area_close(wm, wm.run(o10), o10)
+    a20 = assert_area_close(wm, wm.run(o20), o20)
+    assert a20 > a10 * 1.2, (a10, a20)
+
+
+def test_width_field_numeric(wm, simple_options):
+    o = with_(simple_options, WIDTH_FIELD='width')
+    res = wm.run(o)
+    a = assert_area_close(wm, res, o)
+    a10 = oracle.total_area(wm.run(simple_options).water)
+    assert abs(a - a10) > 0.02 * a10, 'WIDTH_FIELD had no effect (%.1f vs %.1f)' % (a, a10)
+
+
+def test_width_field_text_with_unit(wm, simple_options):
+    # river B's width_txt is '2.5 m'
+    o = with_(simple_options, WIDTH_FIELD='width_txt', RIVERS_WHERE="name = 'B'",
+              LAKES=None, LAKES_LAYER=None, PIXEL_SIZE=0.5, SIMPLIFY=0)
+    res = wm.run(o)
+    a = assert_area_close(wm, res, o, rel=0.03)
+    fallback = oracle.water_area(with_(o, WIDTH_FIELD=None))
+    assert a < 0.5 * fallback, 'text width "2.5 m" not used (%.1f m2, WIDTH fallback gives %.1f)' % (a, fallback)
+    assert not [w for w in res.cap.warnings if 'width' in w.lower()], res.cap.warnings
+
+
+def test_width_field_invalid_values_warn(wm, simple_options):
+    o = with_(simple_options, WIDTH_FIELD='width_txt')
+    res = wm.run(o)
+    warns = res.cap.warnings
+    assert warns, 'no warning for the %d invalid text widths' % scenes.SIMPLE_INVALID_TEXT_WIDTHS
+    n = str(scenes.SIMPLE_INVALID_TEXT_WIDTHS)
+    assert any(n in w for w in warns), 'no warning counts the %s invalid widths: %s' % (n, warns)
+    inputs = oracle.inputs_from_options(o)
+    assert inputs.n_fallback_widths == scenes.SIMPLE_INVALID_TEXT_WIDTHS
+    assert_area_close(wm, res, o)
+
+
+def test_rivers_where(wm, simple_options):
+    o = with_(simple_options, RIVERS_WHERE="name = 'A'")
+    res = wm.run(o)
+    a = assert_area_close(wm, res, o)
+    assert a < oracle.total_area(wm.run(simple_options).water)
+
+
+def test_lakes_where(wm, simple_options):
+    o = with_(simple_options, LAKES_WHERE="name = 'L2'")
+    res = wm.run(o)
+    a = assert_area_close(wm, res, o)
+    assert a < oracle.total_area(wm.run(simple_options).water)
+
+
+def test_rivers_layer(wm, simple_options):
+    o = with_(simple_options, RIVERS_LAYER='rivers2')
+    res = wm.run(o)
+    assert_area_close(wm, res, o)
+    assert res.signature() != wm.run(simple_options).signature()
+
+
+def test_lakes_layer(wm, simple_options):
+    o = with_(simple_options, LAKES_LAYER='ponds')
+    res = wm.run(o)
+    assert_area_close(wm, res, o)
+    assert res.signature() != wm.run(simple_options).signature()
+
+
+def test_default_layer_is_first(wm, simple_options, simple_scene):
+    ds = ogr.Open(simple_scene)
+    first = ds.GetLayer(0).GetName()
+    ds = None
+    assert first == 'rivers'
+    o = with_(simple_options, LAKES=None, LAKES_LAYER=None)
+    a = wm.run(with_(o, RIVERS_LAYER=None))
+    b = wm.run(o)
+    assert a.signature() == b.signature()
+
+
+def test_rivers_only(wm, simple_options):
+    o = with_(simple_options, LAKES=None, LAKES_LAYER=None)
+    assert_area_close(wm, wm.run(o), o)
+
+
+def test_lakes_only(wm, simple_options):
+    o = with_(simple_options, RIVERS=None, RIVERS_LAYER=None)
+    res = wm.run(o)
+    assert_area_close(wm, res, o)
+    assert srs_is(res.srs, scenes.SCENE_EPSG)
+
+
+def test_pixel_size_changes_vertex_density(wm, simple_options):
+    fine = wm.run(with_(simple_options, PIXEL_SIZE=0.5, SIMPLIFY=0))
+    coarse = wm.run(with_(simple_options, PIXEL_SIZE=1, SIMPLIFY=0))
+    nf, nc = oracle.vertex_count(fine.water), oracle.vertex_count(coarse.water)
+    assert nf > 1.5 * nc, 'vertices: PIXEL_SIZE=0.5 -> %d, PIXEL_SIZE=1 -> %d' % (nf, nc)
+
+
+def test_block_size_changes_blocks(wm, simple_options):
+    r256 = wm.run(with_(simple_options, BLOCK_SIZE=256))
+    r512 = wm.run(with_(simple_options, BLOCK_SIZE=512))
+    b256 = {f.block for f in r256.water}
+    b512 = {f.block for f in r512.water}
+    assert len(b256) > len(b512), (sorted(b256), sorted(b512))
+    assert {(bx // 2, by // 2) for bx, by in b256} == b512, (sorted(b256), sorted(b512))
+    for res, B in ((r256, 256), (r512, 512)):
+        problems = oracle.check_water(res.water, B)
+        assert not problems, '\n'.join(problems[:10])
+    # simplification anchors differ with the block grid: within the area
+    # threshold of the oracle tests (0.5 %)
+    a256, a512 = oracle.total_area(r256.water), oracle.total_area(r512.water)
+    assert abs(a256 - a512) <= 5e-3 * a512, (a256, a512)
+    # unsimplified, the union is the same region whatever the block size
+    u256 = oracle.total_area(wm.run(with_(simple_options, BLOCK_SIZE=256, SIMPLIFY=0)).water)
+    u512 = oracle.total_area(wm.run(with_(simple_options, BLOCK_SIZE=512, SIMPLIFY=0)).water)
+    assert abs(u256 - u512) <= 1e-9 * u512, (u256, u512)
+
+
+def test_simplify_changes_vertex_count(wm, simple_options):
+    n0 = oracle.vertex_count(wm.run(with_(simple_options, SIMPLIFY=0)).water)
+    nd = oracle.vertex_count(wm.run(simple_options).water)
+    n3 = oracle.vertex_count(wm.run(with_(simple_options, SIMPLIFY=3)).water)
+    assert n0 > nd > n3, 'vertices: SIMPLIFY=0 %d, default %d, SIMPLIFY=3 %d' % (n0, nd, n3)
+
+
+def test_simplify_default_is_pixel_size(wm, simple_options):
+    a = wm.run(with_(simple_options, SIMPLIFY=None))
+    b = wm.run(with_(simple_options, SIMPLIFY=simple_options['PIXEL_SIZE']))
+    assert a.signature() == b.signature()
+
+
+def test_pixel_size_default(wm, simple_options):
+    a = wm.run(with_(simple_options, PIXEL_SIZE=None))
+    b = wm.run(with_(simple_options, PIXEL_SIZE=oracle.DEFAULT_PIXEL_SIZE))
+    assert a.signature() == b.signature()
+
+
+def test_block_size_default(wm, simple_options):
+    res = wm.run(with_(simple_options, BLOCK_SIZE=None))
+    B = oracle.DEFAULT_BLOCK_SIZE
+    problems = oracle.check_water(res.water, B)
+    assert not problems, '\n'.join(problems[:10])
+    # the whole simple scene lies in one 4096 m block
+    assert {f.block for f in res.water} == {(int(400000 // B), int(4700000 // B))}
+
+
+def test_method_contour(wm, simple_options):
+    a = wm.run(with_(simple_options, METHOD='CONTOUR'))
+    b = wm.run(simple_options)
+    assert a.signature() == b.signature()
+
+
+def test_method_invalid_is_reported(wm, simple_options):
+    ds, cap = wm.open(with_(simple_options, METHOD='NO_SUCH_METHOD'))
+    assert 'METHOD' in cap.text.upper() or 'NO_SUCH_METHOD' in cap.text.upper(), \
+        'an invalid METHOD gave no message (ds=%s)' % ds
+
+
+def test_device_cpu(wm, simple_options):
+    cpu = wm.run(with_(simple_options, DEVICE='CPU'))
+    auto = wm.run(with_(simple_options, DEVICE='AUTO'))
+    a, b = oracle.total_area(cpu.water), oracle.total_area(auto.water)
+    assert abs(a - b) <= 1e-3 * b, (a, b)
+    assert len(cpu.water) == len(auto.water)
+
+
+def test_device_invalid_is_reported(wm, simple_options):
+    ds, cap = wm.open(with_(simple_options, DEVICE='NO_SUCH_DEVICE'))
+    assert 'DEVICE' in cap.text.upper() or 'NO_SUCH_DEVICE' in cap.text.upper(), \
+        'an invalid DEVICE gave no message (ds=%s)' % ds
+
+
+def test_num_threads_identical(wm, simple_options):
+    ref = wm.run(with_(simple_options, NUM_THREADS=1)).signature()
+    for n in (2, 4, 'ALL_CPUS'):
+        got = wm.run(with_(simple_options, NUM_THREADS=n)).signature()
+        assert got == ref, 'NUM_THREADS=%s differs from NUM_THREADS=1' % n
+
+
+def test_target_srs_reprojects(wm, simple_options):
+    o = with_(simple_options, TARGET_SRS=LOCAL_TMERC)
+    res = wm.run(o)
+    assert srs_is(res.srs, LOCAL_TMERC), res.srs.ExportToWkt() if res.srs else None
+    # river A's centerline, reprojected, is water
+    ct = osr.CoordinateTransformation(scenes.srs_from(scenes.SCENE_EPSG), scenes.srs_from(LOCAL_TMERC))
+    x, y, _ = ct.TransformPoint(*scenes.simple_river_point('A'))
+    from shapely.geometry import Point
+    assert any(f.geom.contains(Point(x, y)) for f in res.water), (x, y)
+    problems = oracle.check_water(res.water, o['BLOCK_SIZE'])
+    assert not problems, '\n'.join(problems[:10])
+    assert_area_close(wm, res, o)
+
+
+@pytest.mark.parametrize('lon,lat,epsg', [(1.5, 42.5, 32631), (-58.4, -34.6, 32721)])
+def test_geographic_input_gets_utm(wm, tmp_dir, lon, lat, epsg):
+    path = scenes.make_geographic_scene(os.path.join(tmp_dir, 'geo.gpkg'), lon, lat)
+    o = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'LAKES': path, 'LAKES_LAYER': 'lakes',
+         'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512}
+    res = wm.run(o)
+    assert srs_is(res.srs, epsg), res.srs.ExportToWkt() if res.srs else None
+    assert_area_close(wm, res, o)
+
+
+def test_negative_block_indices(wm, tmp_dir):
+    path = scenes.make_negative_scene(os.path.join(tmp_dir, 'neg.gpkg'))
+    o = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'LAKES': path, 'LAKES_LAYER': 'lakes',
+         'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512}
+    res = wm.run(o)
+    blocks = {f.block for f in res.water}
+    assert any(bx < 0 for bx, _ in blocks), sorted(blocks)
+    assert any(bx >= 0 for bx, _ in blocks), sorted(blocks)
+    problems = oracle.check_water(res.water, 512)
+    assert not problems, '\n'.join(problems[:10])
+    tj, gaps, details = oracle.check_seams(res.water, 512)
+    assert (tj, gaps) == (0, 0), '\n'.join(details[:10])
+    assert_area_close(wm, res, o)
+
+
+# ----------------------------------------------------------------------------
+# descriptor file
+# ----------------------------------------------------------------------------
+
+def descriptor_options(simple_options, rel_path):
+    o = with_(simple_options, RIVERS=rel_path, LAKES=rel_path)
+    return o
+
+
+def test_descriptor_relative_paths(wm, simple_options, simple_scene, tmp_dir):
+    os.makedirs(os.path.join(tmp_dir, 'data'))
+    shutil.copy(simple_scene, os.path.join(tmp_dir, 'data', 'simple.gpkg'))
+    desc = scenes.write_descriptor(os.path.join(tmp_dir, 'scene.watermesh'),
+                                   **descriptor_options(simple_options, 'data/simple.gpkg'))
+    # opened by path, driver chosen by GDAL, from another working directory
+    cwd = os.getcwd()
+    os.chdir('/')
+    try:
+        res = wm.run({}, path=desc, any_driver=True)
+    finally:
+        os.chdir(cwd)
+    ref = wm.run(simple_options)
+    assert res.signature() == ref.signature()
+
+
+def test_descriptor_identified_by_extension(wm, simple_options, simple_scene, tmp_dir):
+    desc = scenes.write_descriptor(os.path.join(tmp_dir, 'x.watermesh'), **simple_options)
+    drv = gdal.IdentifyDriverEx(desc)
+    assert drv is not None and drv.ShortName == wm.DRIVER_NAME, drv and drv.ShortName
+
+
+def test_descriptor_raster(wm, simple_options, tmp_dir):
+    desc = scenes.write_descriptor(os.path.join(tmp_dir, 'r.watermesh'), **simple_options)
+    a, cap = wm.open({}, path=desc, flags=gdal.OF_RASTER, any_driver=True)
+    assert a is not None, cap.text
+    b, cap = wm.open(simple_options, flags=gdal.OF_RASTER)
+    assert b is not None, cap.text
+    assert a.GetGeoTransform() == b.GetGeoTransform()
+    assert (a.RasterXSize, a.RasterYSize) == (b.RasterXSize, b.RasterYSize)
+    w = min(200, a.RasterXSize)
+    h = min(200, a.RasterYSize)
+    assert np.array_equal(a.GetRasterBand(1).ReadAsArray(0, 0, w, h),
+                          b.GetRasterBand(1).ReadAsArray(0, 0, w, h))
+
+
+def test_descriptor_vsimem(wm, simple_options, simple_scene):
+    d = '/vsimem/watermesh_test_desc'
+    try:
+        with open(simple_scene, 'rb') as f:
+            gdal.FileFromMemBuffer(d + '/data/simple.gpkg', f.read())
+        desc = scenes.write_descriptor(d + '/scene.watermesh',
+                                       **descriptor_options(simple_options, 'data/simple.gpkg'))
+        res = wm.run({}, path=desc, any_driver=True)
+        ref = wm.run(simple_options)
+        assert res.signature() == ref.signature()
+    finally:
+        gdal.Unlink(d + '/data/simple.gpkg')
+        gdal.Unlink(d + '/scene.watermesh')
+
+
+def test_descriptor_equals_open_options(wm, simple_options, tmp_dir):
+    o = with_(simple_options, WIDTH=14, WIDTH_FIELD='width', SIMPLIFY=0.75, NUM_THREADS=2)
+    desc = scenes.write_descriptor(os.path.join(tmp_dir, 'o.watermesh'), **o)
+    res = wm.run({}, path=desc, any_driver=True)
+    assert res.signature() == wm.run(o).signature()
+
+
+# ----------------------------------------------------------------------------
+# raster view
+# ----------------------------------------------------------------------------
+
+@pytest.fixture(scope='module')
+def raster(wm, simple_options):
+    ds, cap = wm.open(simple_options, flags=gdal.OF_RASTER)
+    assert ds is not None, cap.text
+    return ds
+
+
+def sample_index(gt, x, y):
+    """(col, row) of the pixel whose center is the sample nearest (x, y)."""
+    return int(math.floor((x - gt[0]) / gt[1])), int(math.floor((y - gt[3]) / gt[5]))
+
+
+def test_raster_band(raster):
+    band = raster.GetRasterBand(1)
+    assert band.DataType == gdal.GDT_Float32, gdal.GetDataTypeName(band.DataType)
+    assert band.GetNoDataValue() is None
+
+
+def test_raster_srs(raster):
+    srs = raster.GetSpatialRef()
+    assert srs_is(srs, scenes.SCENE_EPSG), raster.GetProjection()
+
+
+def test_raster_geotransform_grid_aligned(raster, simple_options):
+    px = float(simple_options['PIXEL_SIZE'])
+    gt = raster.GetGeoTransform()
+    assert gt[1] == px and gt[5] == -px and gt[2] == 0 and gt[4] == 0, gt
+    for v in ((gt[0] + px / 2) / px, (gt[3] - px / 2) / px):
+        assert abs(v - round(v)) < 1e-9, 'pixel centers not on multiples of PIXEL_SIZE: %s' % (gt,)
+    # the raster covers the scene (rivers' centerlines and lakes)
+    x0, y0 = gt[0], gt[3] + gt[5] * raster.RasterYSize
+    x1, y1 = gt[0] + gt[1] * raster.RasterXSize, gt[3]
+    inputs = oracle.inputs_from_options(simple_options)
+    from shapely.ops import unary_union
+    sb = unary_union([l for l, _ in inputs.rivers] + list(inputs.lakes)).bounds
+    assert x0 <= sb[0] and y0 <= sb[1] and x1 >= sb[2] and y1 >= sb[3], ((x0, y0, x1, y1), sb)
+
+
+def read_at(ds, x, y):
+    gt = ds.GetGeoTransform()
+    c, r = sample_index(gt, x, y)
+    return float(ds.GetRasterBand(1).ReadAsArray(c, r, 1, 1)[0, 0])
+
+
+def test_raster_negative_in_river(raster):
+    for name in ('A', 'B', 'C'):
+        v = read_at(raster, *scenes.simple_river_point(name))
+        assert v < 0, 'SDF %r at river %s centerline' % (v, name)
+
+
+def test_raster_positive_far_away(raster):
+    v = read_at(raster, *scenes.simple_dry_point())
+    assert v > 0, v
+
+
+def test_raster_clamped_band(raster, simple_options):
+    px = float(simple_options['PIXEL_SIZE'])
+    a = raster.GetRasterBand(1).ReadAsArray()
+    assert np.all(np.isfinite(a))
+    assert float(np.abs(a).max()) <= 10 * px, 'SDF not clamped to a few pixels: max |d| = %r' % float(np.abs(a).max())
+    assert float(a.min()) < 0 < float(a.max())
+
+
+def test_raster_values_are_distances(raster, simple_options):
+    """Outside the water the SDF is the exact Euclidean distance to it."""
+    inputs = oracle.inputs_from_options(simple_options)
+    gt = raster.GetGeoTransform()
+    # window across river A near its junction with B and the lake L1
+    x, y = scenes.xy(480, 380)
+    c, r = sample_index(gt, x, y)
+    w, h = 40, 40
+    a = raster.GetRasterBand(1).ReadAsArray(c, r - h, w, h)
+    vmax = float(np.abs(raster.GetRasterBand(1).ReadAsArray()).max())
+    checked = 0
+    for j in range(0, h, 2):
+        for i in range(0, w, 2):
+            v = float(a[j, i])
+            sx = gt[0] + (c + i + 0.5) * gt[1]
+            sy = gt[3] + (r - h + j + 0.5) * gt[5]
+            d = oracle.exact_signed_distance_outside(inputs, sx, sy)
+            if d > 1e-3 and v < 0.9 * vmax:
+                assert abs(v - d) <= 2e-3, 'SDF %r, exact distance %r at (%r, %r)' % (v, d, sx, sy)
+                checked += 1
+            if abs(d) > 1e-3:
+                assert (v < 0) == (d < 0), 'SDF sign %r, exact %r at (%r, %r)' % (v, d, sx, sy)
+    assert checked > 20, checked
+
+
+def test_raster_sample_independent_of_block(wm, simple_options):
+    """Same global sample -> bit-identical value, whatever BLOCK_SIZE."""
+    arrays = []
+    for B in (256, 512):
+        ds, cap = wm.open(with_(simple_options, BLOCK_SIZE=B), flags=gdal.OF_RASTER)
+        assert ds is not None, cap.text
+        gt = ds.GetGeoTransform()
+        px = gt[1]
+        # global sample index of the top-left pixel center
+        i0 = int(round((gt[0] + px / 2) / px))
+        j0 = int(round((gt[3] - px / 2) / px))
+        arrays.append((i0, j0, ds.GetRasterBand(1).ReadAsArray()))
+    (ia, ja, a), (ib, jb, b) = arrays
+    # overlap in global indices (columns grow with i, rows go down in j)
+    i_lo, i_hi = max(ia, ib), min(ia + a.shape[1], ib + b.shape[1])
+    j_hi, j_lo = min(ja, jb), max(ja - a.shape[0], jb - b.shape[0])
+    assert i_hi - i_lo > 100 and j_hi - j_lo > 100
+    sa = a[ja - j_hi:ja - j_lo, i_lo - ia:i_hi - ia]
+    sb = b[jb - j_hi:jb - j_lo, i_lo - ib:i_hi - ib]
+    assert sa.shape == sb.shape
+    assert np.array_equal(sa, sb), '%d samples differ' % int(np.sum(sa != sb))
+
+
+def test_raster_translate_projwin(raster):
+    gt = raster.GetGeoTransform()
+    c, r, w, h = 150, 100, 120, 80
+    ulx, uly = gt[0] + c * gt[1], gt[3] + r * gt[5]
+    lrx, lry = ulx + w * gt[1], uly + h * gt[5]
+    out = '/vsimem/watermesh_projwin.tif'
+    try:
+        t = gdal.Translate(out, raster, projWin=[ulx, uly, lrx, lry])
+        assert t is not None
+        assert (t.RasterXSize, t.RasterYSize) == (w, h)
+        assert np.array_equal(t.GetRasterBand(1).ReadAsArray(),
+                              raster.GetRasterBand(1).ReadAsArray(c, r, w, h))
+        t = None
+    finally:
+        gdal.Unlink(out)
+
+
+# ----------------------------------------------------------------------------
+# spatial filter
+# ----------------------------------------------------------------------------
+
+def test_spatial_filter(wm, simple_options):
+    B = simple_options['BLOCK_SIZE']
+    x0, y0 = scenes.xy(300, 350)
+    x1, y1 = scenes.xy(600, 450)
+    rect = (x0, y0, x1, y1)
+    touched = oracle.blocks_touching(rect, B)
+    assert len(touched) == 2, touched
+    full = wm.run(simple_options)
+    filt = wm.run(simple_options, spat=rect)
+    from shapely.geometry import box
+    rbox = box(*rect)
+    for name, ff, ft in (('water', full.water, filt.water), ('mesh', full.mesh, filt.mesh)):
+        assert ft, 'no %s features with the spatial filter' % name
+        blocks = {f.block for f in ft}
+        assert blocks <= touched, '%s: blocks %s outside %s' % (name, sorted(blocks), sorted(touched))
+        subset = [f for f in ff if f.block in touched]
+        sig_sub = wm.signature(subset)
+        sig_ft = wm.signature(ft)
+        # what the filter returned is the unfiltered run's features (same order)
+        it = iter(sig_sub)
+        assert all(any(s == t for t in it) for s in sig_ft), \
+            '%s: filtered features are not the unfiltered ones of the touched blocks' % name
+        # ... at least every one of them that meets the rectangle
+        must = wm.signature([f for f in subset if f.geom.intersects(rbox)])
+        missing = [s for s in must if s not in sig_ft]
+        assert not missing, '%s: %d features meeting the filter are missing' % (name, len(missing))

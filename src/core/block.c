@@ -1,0 +1,225 @@
+/*
+ * block.c - the per-block pipeline (DESIGN: field -> extract -> simplify ->
+ * holes -> triangulate). Blocks are independent: a block reads only the
+ * scene, so any number run in parallel, and its output depends only on the
+ * scene and the block index (invariants 1, 2, 7). Extraction includes the
+ * recovery of sharp corners (crease.c).
+ */
+#define _POSIX_C_SOURCE 200809L
+#include "block.h"
+
+#include "cdt.h"
+#include "contour.h"
+#include "crease.h"
+#include "field.h"
+#include "holes.h"
+#include "simplify.h"
+
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+double wm_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+void wm_block_result_free(wm_block_result *res)
+{
+    if (!res)
+        return;
+    wm_rings_free(&res->rings);
+    free(res->poly_ring);
+    free(res->poly_tri);
+    free(res->tris);
+    memset(res, 0, sizeof *res);
+}
+
+static wm_status copy_ring(const wm_rings *in, size_t i, wm_rings *out)
+{
+    for (size_t k = in->start[i]; k < in->start[i + 1]; k++)
+        if (wm_rings_push(out, in->pts[k]) != WM_OK)
+            return WM_ERR_NOMEM;
+    return wm_rings_close(out);
+}
+
+/* Groups rings into polygons: each outer ring (in ring order) followed by
+ * its holes (in ring order), copied into res->rings. */
+static wm_status group(const wm_rings *in, const int32_t *enc,
+                       wm_block_result *res, const wm_ctx *ctx)
+{
+    const size_t nr = in->nrings;
+    size_t *hstart = calloc(nr + 1, sizeof *hstart), *hole = NULL;
+    size_t *cur = NULL;
+    wm_status st = WM_OK;
+    if (!hstart)
+        return WM_ERR_NOMEM;
+    size_t nouter = 0;
+    for (size_t i = 0; i < nr; i++)
+    {
+        const int outer = wm_ring_area2(in->pts + in->start[i],
+                                        wm_rings_len(in, i)) > 0;
+        if (outer)
+        {
+            nouter++;
+            if (enc[i] >= 0 &&
+                wm_ring_area2(in->pts + in->start[enc[i]],
+                              wm_rings_len(in, (size_t)enc[i])) > 0)
+                st = WM_ERR_INTERNAL;
+        }
+        else if (enc[i] < 0 ||
+                 wm_ring_area2(in->pts + in->start[enc[i]],
+                               wm_rings_len(in, (size_t)enc[i])) < 0)
+            st = WM_ERR_INTERNAL;
+        else
+            hstart[enc[i] + 1]++;
+    }
+    if (st != WM_OK)
+    {
+        free(hstart);
+        return wm_fail(ctx, st, "ring nesting does not alternate");
+    }
+    for (size_t i = 0; i < nr; i++)
+        hstart[i + 1] += hstart[i];
+    hole = malloc((hstart[nr] + 1) * sizeof *hole);
+    cur = malloc((nr + 1) * sizeof *cur);
+    res->poly_ring = malloc((nouter + 1) * sizeof *res->poly_ring);
+    if (!hole || !cur || !res->poly_ring)
+        goto nomem;
+    memcpy(cur, hstart, nr * sizeof *cur);
+    for (size_t i = 0; i < nr; i++)
+        if (enc[i] >= 0 && wm_ring_area2(in->pts + in->start[i],
+                                         wm_rings_len(in, i)) < 0)
+            hole[cur[enc[i]]++] = i;
+    res->npolys = 0;
+    for (size_t i = 0; i < nr; i++)
+    {
+        if (wm_ring_area2(in->pts + in->start[i], wm_rings_len(in, i)) < 0)
+            continue;
+        res->poly_ring[res->npolys++] = res->rings.nrings;
+        if (copy_ring(in, i, &res->rings) != WM_OK)
+            goto nomem;
+        for (size_t h = hstart[i]; h < hstart[i + 1]; h++)
+            if (copy_ring(in, hole[h], &res->rings) != WM_OK)
+                goto nomem;
+    }
+    res->poly_ring[res->npolys] = res->rings.nrings;
+    goto cleanup;
+nomem:
+    st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory grouping polygons");
+cleanup:
+    free(hstart);
+    free(hole);
+    free(cur);
+    return st;
+}
+
+static wm_status triangulate(wm_block_result *res, const wm_ctx *ctx)
+{
+    wm_status st = WM_OK;
+    size_t cap = 0, n = 0;
+    res->poly_tri = calloc(res->npolys + 1, sizeof *res->poly_tri);
+    if (!res->poly_tri)
+        return wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
+    for (size_t p = 0; p < res->npolys; p++)
+    {
+        const size_t r0 = res->poly_ring[p], r1 = res->poly_ring[p + 1];
+        const size_t base = res->rings.start[r0];
+        size_t *rs = malloc((r1 - r0 + 1) * sizeof *rs);
+        uint32_t *t = NULL;
+        size_t nt = 0;
+        if (!rs)
+            return wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
+        for (size_t r = r0; r <= r1; r++)
+            rs[r - r0] = res->rings.start[r] - base;
+        st = wm_cdt_triangulate(res->rings.pts + base, rs, r1 - r0, &t, &nt,
+                                ctx);
+        free(rs);
+        if (st != WM_OK)
+            return st;
+        if (n + nt > cap)
+        {
+            size_t nc = cap ? cap : 256;
+            while (nc < n + nt)
+                nc *= 2;
+            uint32_t *q = realloc(res->tris, 3 * nc * sizeof *q);
+            if (!q)
+            {
+                free(t);
+                return wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
+            }
+            res->tris = q;
+            cap = nc;
+        }
+        for (size_t i = 0; i < 3 * nt; i++)
+            res->tris[3 * n + i] = (uint32_t)(t[i] + base);
+        free(t);
+        n += nt;
+        res->poly_tri[p + 1] = n;
+    }
+    return st;
+}
+
+wm_status wm_block_run(const wm_scene *s, int64_t bx, int64_t by,
+                       const wm_block_opts *opts, wm_block_result *res,
+                       const wm_ctx *ctx)
+{
+    wm_status st;
+    wm_field f;
+    wm_rings raw, simp;
+    int32_t *enc = NULL;
+    memset(res, 0, sizeof *res);
+    memset(&raw, 0, sizeof raw);
+    memset(&simp, 0, sizeof simp);
+    res->bx = bx;
+    res->by = by;
+
+    double t0 = wm_now();
+    st = wm_field_compute(s, bx * s->n, by * s->n, s->n + 1, s->n + 1, &f,
+                          ctx);
+    if (st != WM_OK)
+        return st;
+    res->mixed_tiles = f.mixed;
+    res->pairs = f.pairs;
+    double t1 = wm_now();
+    res->seconds[WM_STAGE_FIELD] = t1 - t0;
+    st = wm_contour_extract(&f, &raw, ctx);
+    wm_field_free(&f);
+    if (st == WM_OK)
+        st = wm_crease_recover(s, bx, by, &raw, ctx);
+    double t2 = wm_now();
+    res->seconds[WM_STAGE_EXTRACT] = t2 - t1;
+    if (st != WM_OK)
+        goto cleanup;
+    st = wm_simplify_rings(&raw, s->n * WM_Q, opts->simplify, &simp, ctx);
+    double t3 = wm_now();
+    res->seconds[WM_STAGE_SIMPLIFY] = t3 - t2;
+    if (st != WM_OK)
+        goto cleanup;
+    enc = malloc((simp.nrings + 1) * sizeof *enc);
+    if (!enc)
+    {
+        st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory");
+        goto cleanup;
+    }
+    if (simp.nrings)
+        st = wm_holes_nesting(&simp, enc, ctx);
+    if (st == WM_OK)
+        st = group(&simp, enc, res, ctx);
+    double t4 = wm_now();
+    res->seconds[WM_STAGE_HOLES] = t4 - t3;
+    if (st != WM_OK)
+        goto cleanup;
+    if (opts->triangulate)
+        st = triangulate(res, ctx);
+    res->seconds[WM_STAGE_TRIANGULATE] = wm_now() - t4;
+cleanup:
+    free(enc);
+    wm_rings_free(&raw);
+    wm_rings_free(&simp);
+    if (st != WM_OK)
+        wm_block_result_free(res);
+    return st;
+}

@@ -1,0 +1,366 @@
+/*
+ * contour.c - marching squares at level 0 with sub-pixel crossings, rings
+ * closed along the block square.
+ *
+ * Method (Lorensen & Cline 1987, in 2D; cf. GDAL alg/marching_squares).
+ * A sample is water when its value is <= 0 (the buffer is a closed set).
+ * Every cell edge whose two samples differ in class holds one crossing, at
+ * the linear interpolation of the two values, rounded to the lattice and
+ * clamped to the open edge (offset 1 .. WM_Q-1 from its first sample):
+ * crossings therefore never coincide with samples nor with each other, and
+ * each cell's segments lie inside the cell. Segments are oriented with
+ * water on their left (outer rings counter-clockwise, holes clockwise).
+ *
+ * Case table: corners 0 (c,r), 1 (c+1,r), 2 (c+1,r+1), 3 (c,r+1), i.e.
+ * counter-clockwise in the y-up frame; edges B (0-1), R (1-2), T (2-3),
+ * L (3-0). Walking the cell counter-clockwise, each crossing edge goes
+ * water->land ("out") or land->water ("in"). A segment runs from an out
+ * edge to an in edge. With one out edge the pairing is forced.
+ *
+ * Saddle rule (two out edges: diagonal corners 0,2 or 1,3 are water): the
+ * mean of the four corner values (summed in corner order) decides; if it
+ * is <= 0 the water corners are joined through the centre and each out
+ * edge pairs with the next in edge counter-clockwise, otherwise they are
+ * separated and each out edge pairs with the previous in edge. Why: the
+ * mean is the bilinear interpolant's value at the centre (GDAL's contour
+ * does the same); it depends only on the cell's four samples, so the rule
+ * is deterministic and identical wherever the cell is computed. Either way
+ * the two segments cut opposite corners and cannot meet.
+ *
+ * Closing: chains that end on the block square are joined by walking the
+ * square counter-clockwise from an exit crossing to the next entry
+ * crossing, adding the corners passed (a square's corner is water exactly
+ * when such a walk passes it). The square walked through water from an exit
+ * reaches an entry first because crossings alternate along it.
+ *
+ * Cost: O(cells in mixed tiles + crossings) with an open-addressing hash
+ * from cell edge to segment; no per-point allocation.
+ */
+#include "contour.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+enum
+{
+    EB = 0,
+    ER = 1,
+    ET = 2,
+    EL = 3
+};
+
+typedef struct
+{
+    uint64_t in_edge, out_edge; /* global cell-edge ids */
+    wm_pt in_pt, out_pt;
+} seg;
+
+typedef struct
+{
+    const wm_field *f;
+    int32_t n; /* cells per side */
+    seg *segs;
+    size_t nsegs, cap;
+} state;
+
+/* Edge id: horizontal edge from sample (c,r) to (c+1,r) = 2*(r*(n+1)+c),
+ * vertical from (c,r) to (c,r+1) = 2*(r*(n+1)+c)+1. */
+static uint64_t edge_id(int32_t n, int32_t c, int32_t r, int vertical)
+{
+    return 2 * ((uint64_t)r * (uint64_t)(n + 1) + (uint64_t)c) +
+           (uint64_t)vertical;
+}
+
+/* Crossing on the edge from sample a (value va) to sample b (value vb),
+ * which differ in class; (x, y) lattice of a; dx/dy unit step to b. */
+static wm_pt crossing(float va, float vb, int32_t x, int32_t y, int vertical)
+{
+    const double t = (double)va / ((double)va - (double)vb);
+    double o = t * WM_Q + 0.5;
+    int32_t off = o < 1.0 ? 1 : (o >= WM_Q - 1 ? WM_Q - 1 : (int32_t)o);
+    wm_pt p = {x, y};
+    if (vertical)
+        p.y += off;
+    else
+        p.x += off;
+    return p;
+}
+
+static int push_seg(state *s, uint64_t ie, uint64_t oe, wm_pt ip, wm_pt op)
+{
+    if (s->nsegs == s->cap)
+    {
+        size_t nc = s->cap ? 2 * s->cap : 1024;
+        seg *p = realloc(s->segs, nc * sizeof *p);
+        if (!p)
+            return 0;
+        s->segs = p;
+        s->cap = nc;
+    }
+    seg *g = &s->segs[s->nsegs++];
+    g->in_edge = ie;
+    g->out_edge = oe;
+    g->in_pt = ip;
+    g->out_pt = op;
+    return 1;
+}
+
+/* Cell (c, r) whose lower-left sample is at p in its tile's value array
+ * (row stride WM_TILE + 1). */
+static int cell(state *s, int32_t c, int32_t r, const float *p)
+{
+    const float v[4] = {p[0], p[1], p[WM_TILE + 2], p[WM_TILE + 1]};
+    const int w[4] = {v[0] <= 0, v[1] <= 0, v[2] <= 0, v[3] <= 0};
+    if (w[0] == w[1] && w[1] == w[2] && w[2] == w[3])
+        return 1;
+    const int32_t n = s->n;
+    /* per edge, CCW from corner k to k+1: id, crossing, out/in */
+    uint64_t id[4];
+    wm_pt pt[4];
+    int kind[4]; /* 0 none, 1 out (water->land), 2 in */
+    const int32_t X = c * WM_Q, Y = r * WM_Q;
+    id[EB] = edge_id(n, c, r, 0);
+    id[ER] = edge_id(n, c + 1, r, 1);
+    id[ET] = edge_id(n, c, r + 1, 0);
+    id[EL] = edge_id(n, c, r, 1);
+    for (int k = 0; k < 4; k++)
+        kind[k] = w[k] == w[(k + 1) & 3] ? 0 : (w[k] ? 1 : 2);
+    /* crossings always interpolated from the edge's lower sample */
+    if (kind[EB])
+        pt[EB] = crossing(v[0], v[1], X, Y, 0);
+    if (kind[ER])
+        pt[ER] = crossing(v[1], v[2], X + WM_Q, Y, 1);
+    if (kind[ET])
+        pt[ET] = crossing(v[3], v[2], X, Y + WM_Q, 0);
+    if (kind[EL])
+        pt[EL] = crossing(v[0], v[3], X, Y, 1);
+    const int saddle = w[0] == w[2] && w[1] == w[3];
+    int joined = 0;
+    if (saddle)
+    {
+        const double mean = ((double)v[0] + v[1] + v[2] + v[3]) / 4.0;
+        joined = mean <= 0;
+    }
+    for (int k = 0; k < 4; k++)
+    {
+        if (kind[k] != 1)
+            continue;
+        int m;
+        if (!saddle || joined)
+        { /* next in edge counter-clockwise */
+            m = (k + 1) & 3;
+            while (kind[m] != 2)
+                m = (m + 1) & 3;
+        }
+        else
+        { /* previous in edge */
+            m = (k + 3) & 3;
+            while (kind[m] != 2)
+                m = (m + 3) & 3;
+        }
+        if (!push_seg(s, id[k], id[m], pt[k], pt[m]))
+            return 0;
+    }
+    return 1;
+}
+
+/* Position along the square, counter-clockwise from (0,0). */
+static int64_t perim(wm_pt p, int32_t S)
+{
+    if (p.y == 0)
+        return p.x;
+    if (p.x == S)
+        return (int64_t)S + p.y;
+    if (p.y == S)
+        return 2 * (int64_t)S + (S - p.x);
+    return 3 * (int64_t)S + (S - p.y);
+}
+
+typedef struct
+{
+    int64_t pos;
+    size_t seg; /* first segment of the chain */
+} entry;
+
+static int cmp_entry(const void *a, const void *b)
+{
+    const int64_t x = ((const entry *)a)->pos, y = ((const entry *)b)->pos;
+    return (x > y) - (x < y);
+}
+
+static size_t hash64(uint64_t k, size_t mask)
+{
+    k ^= k >> 33;
+    k *= UINT64_C(0xff51afd7ed558ccd);
+    k ^= k >> 33;
+    return (size_t)k & mask;
+}
+
+wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
+                             const wm_ctx *ctx)
+{
+    wm_status st = WM_OK;
+    state s = {f, f->w - 1, NULL, 0, 0};
+    size_t *slot = NULL, *next = NULL;
+    uint8_t *used = NULL, *haspred = NULL;
+    entry *ent = NULL;
+    size_t nent = 0;
+    wm_rings_clear(out);
+    if (f->w != f->h || f->w < 2 || (int64_t)(f->w - 1) * WM_Q > WM_LOCAL_MAX)
+        return wm_fail(ctx, WM_ERR_INVALID, "contour: bad block field");
+    const int32_t n = s.n, S = n * WM_Q;
+
+    for (int32_t ty = 0; ty < f->nty; ty++)
+        for (int32_t tx = 0; tx < f->ntx; tx++)
+        {
+            const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+            if (f->kind[t] != WM_TILE_MIXED)
+                continue;
+            const int32_t c0 = tx * WM_TILE, r0 = ty * WM_TILE;
+            const int32_t c1 = c0 + WM_TILE < n ? c0 + WM_TILE : n;
+            const int32_t r1 = r0 + WM_TILE < n ? r0 + WM_TILE : n;
+            for (int32_t r = r0; r < r1; r++)
+            {
+                const float *row = f->val[t] + (r - r0) * (WM_TILE + 1);
+                for (int32_t c = c0; c < c1; c++)
+                    if (!cell(&s, c, r, row + (c - c0)))
+                        goto nomem;
+            }
+        }
+
+    /* hash: in_edge -> segment; next[] links chains */
+    size_t hcap = 16;
+    while (hcap < 2 * s.nsegs + 2)
+        hcap *= 2;
+    slot = malloc(hcap * sizeof *slot);
+    next = malloc((s.nsegs + 1) * sizeof *next);
+    used = calloc(s.nsegs + 1, 1);
+    haspred = calloc(s.nsegs + 1, 1);
+    ent = malloc((s.nsegs + 1) * sizeof *ent);
+    if (!slot || !next || !used || !haspred || !ent)
+        goto nomem;
+    for (size_t i = 0; i < hcap; i++)
+        slot[i] = SIZE_MAX;
+    for (size_t i = 0; i < s.nsegs; i++)
+    {
+        size_t h = hash64(s.segs[i].in_edge, hcap - 1);
+        while (slot[h] != SIZE_MAX)
+            h = (h + 1) & (hcap - 1);
+        slot[h] = i;
+    }
+    for (size_t i = 0; i < s.nsegs; i++)
+    {
+        next[i] = SIZE_MAX;
+        size_t h = hash64(s.segs[i].out_edge, hcap - 1);
+        while (slot[h] != SIZE_MAX)
+        {
+            if (s.segs[slot[h]].in_edge == s.segs[i].out_edge)
+            {
+                next[i] = slot[h];
+                haspred[slot[h]] = 1;
+                break;
+            }
+            h = (h + 1) & (hcap - 1);
+        }
+    }
+    /* chain starts: entries on the block square */
+    for (size_t i = 0; i < s.nsegs; i++)
+        if (!haspred[i])
+        {
+            ent[nent].pos = perim(s.segs[i].in_pt, S);
+            ent[nent].seg = i;
+            nent++;
+        }
+    qsort(ent, nent, sizeof *ent, cmp_entry);
+
+    /* open chains, closed along the square */
+    for (size_t e = 0; e < nent; e++)
+    {
+        if (used[ent[e].seg])
+            continue;
+        size_t cur = e;
+        for (;;)
+        {
+            size_t g = ent[cur].seg;
+            if (used[g])
+                break; /* ring closed */
+            if (wm_rings_push(out, s.segs[g].in_pt) != WM_OK)
+                goto nomem;
+            size_t last = g;
+            for (; g != SIZE_MAX; g = next[g])
+            {
+                used[g] = 1;
+                last = g;
+                if (wm_rings_push(out, s.segs[g].out_pt) != WM_OK)
+                    goto nomem;
+            }
+            /* walk the square CCW to the next entry, adding corners */
+            const int64_t p = perim(s.segs[last].out_pt, S);
+            size_t lo = 0, hi = nent; /* first entry with pos > p */
+            while (lo < hi)
+            {
+                size_t mid = (lo + hi) / 2;
+                if (ent[mid].pos > p)
+                    hi = mid;
+                else
+                    lo = mid + 1;
+            }
+            const size_t nx = lo == nent ? 0 : lo;
+            const int64_t q = ent[nx].pos + (nx == lo ? 0 : 4 * (int64_t)S);
+            for (int64_t k = 1; k <= 8; k++)
+            {
+                const int64_t cpos = (p / S + k) * S;
+                if (cpos >= q)
+                    break;
+                const int64_t m = (cpos / S) & 3;
+                const wm_pt corner = {m == 1 || m == 2 ? S : 0,
+                                      m >= 2 ? S : 0};
+                if (wm_rings_push(out, corner) != WM_OK)
+                    goto nomem;
+            }
+            cur = nx;
+        }
+        if (wm_rings_close(out) != WM_OK)
+            goto nomem;
+    }
+    /* closed loops inside the block */
+    for (size_t i = 0; i < s.nsegs; i++)
+    {
+        if (used[i])
+            continue;
+        for (size_t g = i; !used[g]; g = next[g])
+        {
+            if (next[g] == SIZE_MAX)
+            {
+                st = wm_fail(ctx, WM_ERR_INTERNAL, "contour: open chain");
+                goto cleanup;
+            }
+            used[g] = 1;
+            if (wm_rings_push(out, s.segs[g].out_pt) != WM_OK)
+                goto nomem;
+        }
+        if (wm_rings_close(out) != WM_OK)
+            goto nomem;
+    }
+    /* no crossing on the square at all: the square is water or land */
+    if (nent == 0 && wm_field_at(f, 0, 0) <= 0)
+    {
+        const wm_pt sq[4] = {{0, 0}, {S, 0}, {S, S}, {0, S}};
+        for (int k = 0; k < 4; k++)
+            if (wm_rings_push(out, sq[k]) != WM_OK)
+                goto nomem;
+        if (wm_rings_close(out) != WM_OK)
+            goto nomem;
+    }
+    goto cleanup;
+nomem:
+    st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory extracting contours");
+cleanup:
+    free(s.segs);
+    free(slot);
+    free(next);
+    free(used);
+    free(haspred);
+    free(ent);
+    return st;
+}

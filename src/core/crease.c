@@ -1,0 +1,703 @@
+/*
+ * crease.c - recovery of the sharp corners of the union boundary.
+ *
+ * Why: marching squares on a sampled distance field rounds every corner of
+ * the union off within about a pixel, but where two input boundaries cross
+ * at a small angle (a river bank meeting a lake shore nearly tangentially,
+ * two tributaries joining at a sharp angle, an acute lake vertex) the lost
+ * tip is pixel / (2 tan(angle / 2)) long: several pixels for a 10 degree
+ * wedge. The corners are known exactly from the input, so they are put
+ * back (cf. Kobbelt et al. 2001, "Feature sensitive surface extraction from
+ * volume data", which does the same per cell from normals).
+ *
+ * Method, per block:
+ *   1. boundary primitives of the inputs in reach: for a river segment its
+ *      two offset lines and two end circles, for a lake edge the edge;
+ *   2. their pairwise intersections (primitives bucketed in a grid; pairs
+ *      from the same input item skipped), kept when strictly inside the
+ *      block;
+ *   3. for each candidate C (lattice-snapped), the nearest ring edge; C is
+ *      kept when it is 1/4 .. 4 pixels away (closer: nothing to recover),
+ *      lies on the union's boundary (no input covers it by more than a
+ *      lattice unit: then it is a corner of the union) and its edge is not
+ *      on the block square (seams stay exact, invariant 4);
+ *   4. C is inserted into that edge when the two new edges meet no other
+ *      ring edge and the triangle they add or cut contains no ring vertex
+ *      (exact lattice predicates), so the rings stay simple, disjoint and
+ *      keep their nesting (invariant 3). At most one insertion per edge.
+ * Floating point decides only which corners to try, never validity.
+ *
+ * Cost: O(primitives + candidates * local edges); candidates are few (one
+ * per crossing of input boundaries).
+ */
+#include "crease.h"
+
+#include "lattice.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct
+{
+    double x0, y0, x1, y1; /* segment, or circle centre (x0,y0) radius x1 */
+    int circle;
+    uint32_t item;
+} prim;
+
+typedef struct
+{
+    uint64_t key;
+    uint32_t ref;
+} cellref;
+
+static int cmp_cellref(const void *a, const void *b)
+{
+    const cellref *x = a, *y = b;
+    if (x->key != y->key)
+        return x->key < y->key ? -1 : 1;
+    return (x->ref > y->ref) - (x->ref < y->ref);
+}
+
+typedef struct
+{
+    wm_pt p;
+    size_t ring, seg; /* insert after vertex seg of ring */
+} insertion;
+
+static int cmp_pt(const void *a, const void *b)
+{
+    const wm_pt *x = a, *y = b;
+    if (x->x != y->x)
+        return x->x < y->x ? -1 : 1;
+    return (x->y > y->y) - (x->y < y->y);
+}
+
+static int cmp_ins(const void *a, const void *b)
+{
+    const insertion *x = a, *y = b;
+    if (x->ring != y->ring)
+        return x->ring < y->ring ? -1 : 1;
+    return (x->seg > y->seg) - (x->seg < y->seg);
+}
+
+/* growable array helper */
+static int push(void **buf, size_t *n, size_t *cap, const void *item,
+                size_t size)
+{
+    if (*n == *cap)
+    {
+        size_t nc = *cap ? 2 * *cap : 64;
+        void *p = realloc(*buf, nc * size);
+        if (!p)
+            return 0;
+        *buf = p;
+        *cap = nc;
+    }
+    memcpy((char *)*buf + *n * size, item, size);
+    (*n)++;
+    return 1;
+}
+
+/* ---- candidate corners: intersections of primitives ------------------- */
+
+typedef struct
+{
+    double x, y;
+} dpt;
+
+static int seg_seg(const prim *a, const prim *b, dpt *out)
+{
+    const double rx = a->x1 - a->x0, ry = a->y1 - a->y0;
+    const double sx = b->x1 - b->x0, sy = b->y1 - b->y0;
+    const double den = rx * sy - ry * sx;
+    if (den == 0)
+        return 0;
+    const double qx = b->x0 - a->x0, qy = b->y0 - a->y0;
+    const double t = (qx * sy - qy * sx) / den, u = (qx * ry - qy * rx) / den;
+    if (t < 0 || t > 1 || u < 0 || u > 1)
+        return 0;
+    out[0].x = a->x0 + t * rx;
+    out[0].y = a->y0 + t * ry;
+    return 1;
+}
+
+static int seg_circle(const prim *a, const prim *c, dpt *out)
+{
+    const double dx = a->x1 - a->x0, dy = a->y1 - a->y0;
+    const double fx = a->x0 - c->x0, fy = a->y0 - c->y0, r = c->x1;
+    const double A = dx * dx + dy * dy, B = 2 * (fx * dx + fy * dy);
+    const double C = fx * fx + fy * fy - r * r;
+    const double disc = B * B - 4 * A * C;
+    if (A == 0 || disc < 0)
+        return 0;
+    const double sq = sqrt(disc);
+    int n = 0;
+    for (int k = -1; k <= 1; k += 2)
+    {
+        const double t = (-B + k * sq) / (2 * A);
+        if (t >= 0 && t <= 1)
+        {
+            out[n].x = a->x0 + t * dx;
+            out[n].y = a->y0 + t * dy;
+            n++;
+        }
+    }
+    return n;
+}
+
+static int circle_circle(const prim *a, const prim *b, dpt *out)
+{
+    const double dx = b->x0 - a->x0, dy = b->y0 - a->y0;
+    const double d2 = dx * dx + dy * dy, d = sqrt(d2);
+    const double r0 = a->x1, r1 = b->x1;
+    if (d == 0 || d > r0 + r1 || d < fabs(r0 - r1))
+        return 0;
+    const double l = (r0 * r0 - r1 * r1 + d2) / (2 * d);
+    const double h2 = r0 * r0 - l * l, h = h2 > 0 ? sqrt(h2) : 0;
+    const double mx = a->x0 + l * dx / d, my = a->y0 + l * dy / d;
+    out[0].x = mx + h * dy / d;
+    out[0].y = my - h * dx / d;
+    out[1].x = mx - h * dy / d;
+    out[1].y = my + h * dx / d;
+    return 2;
+}
+
+static int intersect(const prim *a, const prim *b, dpt *out)
+{
+    if (!a->circle && !b->circle)
+        return seg_seg(a, b, out);
+    if (a->circle && b->circle)
+        return circle_circle(a, b, out);
+    return a->circle ? seg_circle(b, a, out) : seg_circle(a, b, out);
+}
+
+static void prim_box(const prim *p, double *b)
+{
+    if (p->circle)
+    {
+        b[0] = p->x0 - p->x1;
+        b[1] = p->y0 - p->x1;
+        b[2] = p->x0 + p->x1;
+        b[3] = p->y0 + p->x1;
+        return;
+    }
+    b[0] = fmin(p->x0, p->x1);
+    b[1] = fmin(p->y0, p->y1);
+    b[2] = fmax(p->x0, p->x1);
+    b[3] = fmax(p->y0, p->y1);
+}
+
+/* ---- the block's inputs ------------------------------------------------ */
+
+typedef struct
+{
+    const wm_scene *s;
+    int64_t X0, Y0; /* block origin, global lattice */
+    const uint32_t *segs;
+    size_t nsegs;
+    const uint32_t *polys;
+    size_t npolys;
+} inputs;
+
+/* Distance from (x, y) (block-local, double) to segment (global ends). */
+static double seg_dist(const inputs *in, int64_t ax, int64_t ay, int64_t bx,
+                       int64_t by, double x, double y)
+{
+    const double x0 = (double)(ax - in->X0), y0 = (double)(ay - in->Y0);
+    const double dx = (double)(bx - ax), dy = (double)(by - ay);
+    const double l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((x - x0) * dx + (y - y0) * dy) / l2 : 0;
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    const double ex = x - (x0 + t * dx), ey = y - (y0 + t * dy);
+    return sqrt(ex * ex + ey * ey);
+}
+
+/* True when no input covers (x, y) by more than `tol`: the point is on or
+ * outside every input, so a point on two boundaries is on the union's. */
+static int on_union_boundary(const inputs *in, double x, double y,
+                             double tol)
+{
+    const wm_scene *s = in->s;
+    for (size_t i = 0; i < in->nsegs; i++)
+    {
+        const wm_river_seg *g = &s->segs[in->segs[i]];
+        if (seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y) < g->r - tol)
+            return 0;
+    }
+    for (size_t k = 0; k < in->npolys; k++)
+    {
+        const uint32_t p = in->polys[k];
+        const wm_box b = s->poly_box[p];
+        const double gx = x + (double)in->X0, gy = y + (double)in->Y0;
+        if (gx < (double)b.x0 || gx > (double)b.x1 || gy < (double)b.y0 ||
+            gy > (double)b.y1)
+            continue;
+        int inside = 0;
+        double dmin = INFINITY;
+        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
+        {
+            const wm_lake_edge *g = &s->edges[e];
+            const double ay = (double)(g->ay - in->Y0);
+            const double by = (double)(g->by - in->Y0);
+            if ((ay > y) != (by > y))
+            {
+                const double ax = (double)(g->ax - in->X0);
+                const double bxx = (double)(g->bx - in->X0);
+                if (x < ax + (y - ay) * (bxx - ax) / (by - ay))
+                    inside = !inside;
+            }
+            const double d = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y);
+            dmin = d < dmin ? d : dmin;
+        }
+        if (inside && dmin > tol)
+            return 0;
+    }
+    return 1;
+}
+
+/* ---- ring edges in a grid --------------------------------------------- */
+
+#define RCELL (2 * WM_Q) /* ring grid cell: 2 pixels */
+
+typedef struct
+{
+    const wm_rings *r;
+    cellref *cells; /* sorted by key; ref = global vertex index k (edge
+                       from k to its successor) */
+    size_t ncells;
+    size_t *ring_of; /* vertex -> ring */
+} ringgrid;
+
+static uint64_t ckey(int64_t cx, int64_t cy)
+{
+    return ((uint64_t)(uint32_t)(int32_t)cy << 32) | (uint32_t)(int32_t)cx;
+}
+
+static size_t succ(const wm_rings *r, const size_t *ring_of, size_t k)
+{
+    const size_t ri = ring_of[k];
+    return k + 1 == r->start[ri + 1] ? r->start[ri] : k + 1;
+}
+
+static size_t pred(const wm_rings *r, const size_t *ring_of, size_t k)
+{
+    const size_t ri = ring_of[k];
+    return k == r->start[ri] ? r->start[ri + 1] - 1 : k - 1;
+}
+
+static wm_status build_ringgrid(ringgrid *g, const wm_rings *r)
+{
+    size_t n = 0, cap = 0;
+    g->r = r;
+    g->cells = NULL;
+    g->ring_of = malloc((r->npts + 1) * sizeof *g->ring_of);
+    if (!g->ring_of)
+        return WM_ERR_NOMEM;
+    for (size_t ri = 0; ri < r->nrings; ri++)
+        for (size_t k = r->start[ri]; k < r->start[ri + 1]; k++)
+            g->ring_of[k] = ri;
+    for (size_t k = 0; k < r->npts; k++)
+    {
+        const wm_pt a = r->pts[k], b = r->pts[succ(r, g->ring_of, k)];
+        const int32_t x0 = (a.x < b.x ? a.x : b.x) / RCELL;
+        const int32_t x1 = (a.x > b.x ? a.x : b.x) / RCELL;
+        const int32_t y0 = (a.y < b.y ? a.y : b.y) / RCELL;
+        const int32_t y1 = (a.y > b.y ? a.y : b.y) / RCELL;
+        for (int32_t cy = y0; cy <= y1; cy++)
+            for (int32_t cx = x0; cx <= x1; cx++)
+            {
+                const cellref c = {ckey(cx, cy), (uint32_t)k};
+                if (!push((void **)&g->cells, &n, &cap, &c, sizeof c))
+                    return WM_ERR_NOMEM;
+            }
+    }
+    qsort(g->cells, n, sizeof *g->cells, cmp_cellref);
+    g->ncells = n;
+    return WM_OK;
+}
+
+/* Calls fn(edge k) for each edge registered in cells touching the box
+ * [x0,x1]x[y0,y1] (an edge may be visited more than once). Returns 0 as
+ * soon as fn does. */
+static int visit_edges(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
+                       int32_t y1, int (*fn)(void *, size_t), void *arg)
+{
+    if (x0 < 0)
+        x0 = 0;
+    if (y0 < 0)
+        y0 = 0;
+    for (int32_t cy = y0 / RCELL; cy <= y1 / RCELL; cy++)
+        for (int32_t cx = x0 / RCELL; cx <= x1 / RCELL; cx++)
+        {
+            const uint64_t key = ckey(cx, cy);
+            size_t lo = 0, hi = g->ncells;
+            while (lo < hi)
+            {
+                const size_t mid = (lo + hi) / 2;
+                if (g->cells[mid].key < key)
+                    lo = mid + 1;
+                else
+                    hi = mid;
+            }
+            for (; lo < g->ncells && g->cells[lo].key == key; lo++)
+                if (!fn(arg, g->cells[lo].ref))
+                    return 0;
+        }
+    return 1;
+}
+
+/* nearest edge search state */
+typedef struct
+{
+    const ringgrid *g;
+    double x, y, best;
+    size_t edge;
+} nearest;
+
+static int nearest_fn(void *arg, size_t k)
+{
+    nearest *n = arg;
+    const wm_rings *r = n->g->r;
+    const wm_pt a = r->pts[k], b = r->pts[succ(r, n->g->ring_of, k)];
+    const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((n->x - a.x) * dx + (n->y - a.y) * dy) / l2 : 0;
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    const double ex = n->x - (a.x + t * dx), ey = n->y - (a.y + t * dy);
+    const double d = sqrt(ex * ex + ey * ey);
+    if (d < n->best || (d == n->best && k < n->edge))
+    {
+        n->best = d;
+        n->edge = k;
+    }
+    return 1;
+}
+
+/* validity check state for inserting c into edge (pa, pb) */
+typedef struct
+{
+    const ringgrid *g;
+    size_t ka, kb; /* vertex indices of the edge's ends */
+    wm_pt a, b, c;
+    int ok;
+} check;
+
+static int check_fn(void *arg, size_t k)
+{
+    check *ck = arg;
+    const wm_rings *r = ck->g->r;
+    const size_t k2 = succ(r, ck->g->ring_of, k);
+    const wm_pt p = r->pts[k], q = r->pts[k2];
+    if (k == ck->ka)
+        return 1; /* the edge being split */
+    /* a ring vertex in the closed triangle (a, c, b), other than a, b */
+    if (k != ck->ka && k != ck->kb)
+    {
+        const int o1 = wm_orient(ck->a, ck->c, p), o2 = wm_orient(ck->c, ck->b, p);
+        const int o3 = wm_orient(ck->b, ck->a, p);
+        if ((o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0))
+        {
+            ck->ok = 0;
+            return 0;
+        }
+    }
+    /* the new edges a-c and c-b against edge p-q */
+    const wm_pt ne[2][2] = {{ck->a, ck->c}, {ck->c, ck->b}};
+    for (int e = 0; e < 2; e++)
+    {
+        const int shares_a = e == 0 && (k2 == ck->ka);   /* q == a */
+        const int shares_b = e == 1 && (k == ck->kb);    /* p == b */
+        if (shares_a || shares_b)
+        {
+            /* adjacent edge: may share only the common vertex */
+            const wm_pt other = shares_a ? p : q;
+            const wm_pt common = shares_a ? ck->a : ck->b;
+            const wm_pt far = shares_a ? ck->c : ck->c;
+            if (wm_on_segment(common, far, other) ||
+                wm_on_segment(common, other, far))
+            {
+                ck->ok = 0;
+                return 0;
+            }
+            continue;
+        }
+        if (wm_segments_meet(ne[e][0], ne[e][1], p, q))
+        {
+            ck->ok = 0;
+            return 0;
+        }
+    }
+    return 1;
+}
+
+/* True when c may be inserted into edge ka (to its successor) of the
+ * current rings: see the file comment, step 4. */
+static int can_insert(const ringgrid *g, size_t ka, wm_pt c, int32_t S,
+                      const uint8_t *split, const insertion *ins,
+                      size_t nins)
+{
+    const wm_rings *rings = g->r;
+    const size_t kb = succ(rings, g->ring_of, ka);
+    const wm_pt a = rings->pts[ka], b = rings->pts[kb];
+    if (split[ka] || wm_orient(a, b, c) == 0)
+        return 0;
+    /* never touch an edge on the block square */
+    if ((a.x == b.x && (a.x == 0 || a.x == S)) ||
+        (a.y == b.y && (a.y == 0 || a.y == S)))
+        return 0;
+    check ck = {g, ka, kb, a, b, c, 1};
+    const int32_t x0 = a.x < b.x ? a.x : b.x, x1 = a.x > b.x ? a.x : b.x;
+    const int32_t y0 = a.y < b.y ? a.y : b.y, y1 = a.y > b.y ? a.y : b.y;
+    visit_edges(g, (x0 < c.x ? x0 : c.x) - 1, (y0 < c.y ? y0 : c.y) - 1,
+                (x1 > c.x ? x1 : c.x) + 1, (y1 > c.y ? y1 : c.y) + 1,
+                check_fn, &ck);
+    /* and against corners inserted earlier in this pass */
+    for (size_t j = 0; ck.ok && j < nins; j++)
+    {
+        const insertion *o = &ins[j];
+        const wm_pt oa = rings->pts[o->seg];
+        const wm_pt ob = rings->pts[succ(rings, g->ring_of, o->seg)];
+        const wm_pt ne[2][2] = {{a, c}, {c, b}};
+        const wm_pt oe[2][2] = {{oa, o->p}, {o->p, ob}};
+        for (int e = 0; ck.ok && e < 2; e++)
+            for (int f = 0; ck.ok && f < 2; f++)
+                if (wm_segments_meet(ne[e][0], ne[e][1], oe[f][0], oe[f][1]))
+                    ck.ok = 0;
+    }
+    return ck.ok;
+}
+
+/* One pass: tries every candidate against the current rings and rebuilds
+ * them with the accepted corners; *ninserted says how many. */
+static wm_status insert_pass(const inputs *in, wm_rings *rings,
+                             const wm_pt *cand, size_t ncand,
+                             size_t *ninserted)
+{
+    wm_status st = WM_OK;
+    const int32_t S = in->s->n * WM_Q;
+    insertion *ins = NULL;
+    size_t nins = 0, inscap = 0;
+    uint8_t *split = NULL;
+    ringgrid g;
+    wm_rings out;
+    memset(&g, 0, sizeof g);
+    memset(&out, 0, sizeof out);
+    *ninserted = 0;
+    st = build_ringgrid(&g, rings);
+    if (st != WM_OK)
+        goto nomem;
+    split = calloc(rings->npts + 1, 1);
+    if (!split)
+        goto nomem;
+    for (size_t i = 0; i < ncand; i++)
+    {
+        if (i > 0 && wm_pt_eq(cand[i], cand[i - 1]))
+            continue;
+        const wm_pt c = cand[i];
+        nearest nr = {&g, c.x, c.y, INFINITY, SIZE_MAX};
+        const int32_t R = 4 * WM_Q;
+        visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn, &nr);
+        if (nr.edge == SIZE_MAX || nr.best <= WM_Q / 4.0 || nr.best > R)
+            continue;
+        if (!on_union_boundary(in, c.x, c.y, 1.0))
+            continue;
+        /* the nearest edge, else one of its neighbours (a truncated tip
+         * ends in a vertex: either edge at it may be the one to split) */
+        const size_t tries[3] = {nr.edge, succ(rings, g.ring_of, nr.edge),
+                                 pred(rings, g.ring_of, nr.edge)};
+        size_t ka = SIZE_MAX;
+        for (int t = 0; t < 3 && ka == SIZE_MAX; t++)
+            if (can_insert(&g, tries[t], c, S, split, ins, nins))
+                ka = tries[t];
+        if (ka == SIZE_MAX)
+            continue;
+        const size_t kb = succ(rings, g.ring_of, ka);
+        const insertion x = {c, g.ring_of[ka], ka};
+        if (!push((void **)&ins, &nins, &inscap, &x, sizeof x))
+            goto nomem;
+        split[ka] = 1;
+        split[pred(rings, g.ring_of, ka)] = 1; /* neighbours stay as they */
+        split[kb] = 1;                          /* are: one corner per run */
+    }
+
+    if (nins == 0)
+        goto cleanup;
+    /* rebuild the rings with the corners */
+    qsort(ins, nins, sizeof *ins, cmp_ins);
+    size_t j = 0;
+    for (size_t ri = 0; ri < rings->nrings; ri++)
+    {
+        for (size_t k = rings->start[ri]; k < rings->start[ri + 1]; k++)
+        {
+            if (wm_rings_push(&out, rings->pts[k]) != WM_OK)
+                goto nomem;
+            if (j < nins && ins[j].seg == k)
+                if (wm_rings_push(&out, ins[j++].p) != WM_OK)
+                    goto nomem;
+        }
+        if (wm_rings_close(&out) != WM_OK)
+            goto nomem;
+    }
+    {
+        const wm_rings tmp = *rings;
+        *rings = out;
+        out = tmp;
+    }
+    *ninserted = nins;
+    goto cleanup;
+nomem:
+    st = WM_ERR_NOMEM;
+cleanup:
+    free(ins);
+    free(split);
+    free(g.cells);
+    free(g.ring_of);
+    wm_rings_free(&out);
+    return st;
+}
+
+wm_status wm_crease_recover(const wm_scene *s, int64_t bx, int64_t by,
+                            wm_rings *rings, const wm_ctx *ctx)
+{
+    wm_status st = WM_OK;
+    prim *pr = NULL;
+    size_t npr = 0, prcap = 0;
+    cellref *pc = NULL;
+    size_t npc = 0, pccap = 0;
+    wm_pt *cand = NULL;
+    size_t ncand = 0, candcap = 0;
+
+    if (s->nbx == 0 || rings->nrings == 0 || bx < s->bx0 || by < s->by0 ||
+        bx >= s->bx0 + s->nbx || by >= s->by0 + s->nby)
+        return WM_OK;
+    const int32_t S = s->n * WM_Q;
+    const size_t blk = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
+    inputs in = {s,
+                 bx * (int64_t)S,
+                 by * (int64_t)S,
+                 s->blk_seg + s->blk_seg_start[blk],
+                 s->blk_seg_start[blk + 1] - s->blk_seg_start[blk],
+                 s->blk_poly + s->blk_poly_start[blk],
+                 s->blk_poly_start[blk + 1] - s->blk_poly_start[blk]};
+    if (in.nsegs + in.npolys < 1)
+        return WM_OK;
+
+    /* 1. primitives, local doubles */
+    const double lo = -4.0 * WM_Q, hi = (double)S + 4.0 * WM_Q;
+    for (size_t i = 0; i < in.nsegs; i++)
+    {
+        const wm_river_seg *q = &s->segs[in.segs[i]];
+        const double ax = (double)(q->ax - in.X0), ay = (double)(q->ay - in.Y0);
+        const double bx2 = (double)(q->bx - in.X0), by2 = (double)(q->by - in.Y0);
+        const double dx = bx2 - ax, dy = by2 - ay, l = sqrt(dx * dx + dy * dy);
+        prim p[4];
+        int np = 0;
+        if (l > 0)
+        {
+            const double nx = -dy / l * q->r, ny = dx / l * q->r;
+            p[np++] = (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, in.segs[i]};
+            p[np++] = (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, in.segs[i]};
+        }
+        p[np++] = (prim){ax, ay, q->r, 0, 1, in.segs[i]};
+        p[np++] = (prim){bx2, by2, q->r, 0, 1, in.segs[i]};
+        for (int k = 0; k < np; k++)
+            if (!push((void **)&pr, &npr, &prcap, &p[k], sizeof *p))
+                goto nomem;
+    }
+    for (size_t k = 0; k < in.npolys; k++)
+    {
+        const uint32_t pidx = in.polys[k];
+        for (size_t e = s->poly_start[pidx]; e < s->poly_start[pidx + 1]; e++)
+        {
+            const wm_lake_edge *q = &s->edges[e];
+            prim p = {(double)(q->ax - in.X0), (double)(q->ay - in.Y0),
+                      (double)(q->bx - in.X0), (double)(q->by - in.Y0), 0,
+                      (uint32_t)(s->nsegs + e)};
+            double b[4];
+            prim_box(&p, b);
+            if (b[2] < lo || b[0] > hi || b[3] < lo || b[1] > hi)
+                continue;
+            if (!push((void **)&pr, &npr, &prcap, &p, sizeof p))
+                goto nomem;
+        }
+    }
+    if (npr > UINT32_MAX)
+        goto cleanup;
+
+    /* 2. candidates: pairs sharing a grid cell, found once (in the cell
+     * holding the intersection) */
+    const double PC = 16.0 * WM_Q;
+    for (size_t i = 0; i < npr; i++)
+    {
+        double b[4];
+        prim_box(&pr[i], b);
+        b[0] = fmax(b[0], lo);
+        b[1] = fmax(b[1], lo);
+        b[2] = fmin(b[2], hi);
+        b[3] = fmin(b[3], hi);
+        if (b[0] > b[2] || b[1] > b[3])
+            continue;
+        for (int64_t cy = (int64_t)floor(b[1] / PC); cy <= (int64_t)floor(b[3] / PC); cy++)
+            for (int64_t cx = (int64_t)floor(b[0] / PC); cx <= (int64_t)floor(b[2] / PC); cx++)
+            {
+                const cellref c = {ckey(cx, cy), (uint32_t)i};
+                if (!push((void **)&pc, &npc, &pccap, &c, sizeof c))
+                    goto nomem;
+            }
+    }
+    qsort(pc, npc, sizeof *pc, cmp_cellref);
+    for (size_t a = 0; a < npc;)
+    {
+        size_t z = a;
+        while (z < npc && pc[z].key == pc[a].key)
+            z++;
+        const int64_t cx = (int32_t)(uint32_t)(pc[a].key & 0xffffffffu);
+        const int64_t cy = (int32_t)(uint32_t)(pc[a].key >> 32);
+        for (size_t i = a; i < z; i++)
+            for (size_t j = i + 1; j < z; j++)
+            {
+                const prim *p = &pr[pc[i].ref], *q = &pr[pc[j].ref];
+                if (p->item == q->item)
+                    continue;
+                dpt hit[2];
+                const int nh = intersect(p, q, hit);
+                for (int h = 0; h < nh; h++)
+                {
+                    if (floor(hit[h].x / PC) != (double)cx ||
+                        floor(hit[h].y / PC) != (double)cy)
+                        continue;
+                    if (!(hit[h].x >= WM_Q && hit[h].x <= S - WM_Q &&
+                          hit[h].y >= WM_Q && hit[h].y <= S - WM_Q))
+                        continue; /* keep a pixel off the block square */
+                    const wm_pt c = {(int32_t)llround(hit[h].x),
+                                     (int32_t)llround(hit[h].y)};
+                    if (!push((void **)&cand, &ncand, &candcap, &c, sizeof c))
+                        goto nomem;
+                }
+            }
+        a = z;
+    }
+    if (ncand == 0)
+        goto cleanup;
+    qsort(cand, ncand, sizeof *cand, cmp_pt);
+
+    /* 3-4. insertion passes: a corner next to one just inserted waits for
+     * the next pass, which sees the new edges */
+    for (int pass = 0; pass < 4; pass++)
+    {
+        size_t n = 0;
+        st = insert_pass(&in, rings, cand, ncand, &n);
+        if (st != WM_OK)
+            goto nomem;
+        if (n == 0)
+            break;
+    }
+    goto cleanup;
+nomem:
+    st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory recovering corners");
+cleanup:
+    free(pr);
+    free(pc);
+    free(cand);
+    return st;
+}

@@ -1,0 +1,38 @@
+/*
+ * crease.h - sharp corners of the water boundary, recovered after sampling.
+ */
+#ifndef WM_CREASE_H
+#define WM_CREASE_H
+
+#include "scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/**
+ * Inserts the exact crease corners of block (bx, by) into its extracted
+ * rings (block-local lattice units, as from wm_contour_extract).
+ *
+ * Where the boundaries of two inputs cross (a river bank meeting a lake
+ * shore or another bank, the inner side of a sharp bend) the union's
+ * boundary has a corner. A sampled field loses the tip of a sharp corner
+ * (by about pixel / (2 tan(angle / 2))); this puts the corner back: each
+ * crossing point C of two input boundaries that lies on the union's
+ * boundary, strictly inside the block, and more than a quarter pixel from
+ * the rings, is inserted into the nearest ring edge (never an edge on the
+ * block square), when the two new edges meet no other edge and the
+ * triangle they add or cut contains no ring vertex (exact predicates).
+ * Otherwise it is skipped: the rings stay valid, at worst unimproved.
+ *
+ * Deterministic: candidates are found in a fixed order and inserted in
+ * lexicographic order of their lattice position.
+ */
+wm_status wm_crease_recover(const wm_scene *s, int64_t bx, int64_t by,
+                            wm_rings *rings, const wm_ctx *ctx);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* WM_CREASE_H */

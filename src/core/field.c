@@ -1,0 +1,601 @@
+/*
+ * field.c - signed distance field of a window of the global sample grid
+ * (the paper's "texture generation", C path).
+ *
+ * Method. The window is split into tiles of WM_TILE x WM_TILE cells. River
+ * segments (capsules) and lake edges are binned into the tiles they may
+ * reach (bounding box grown by radius + band: a conservative superset, which
+ * is enough because anything farther than the band is clamped away). A tile
+ * with nothing in reach is uniform: one inside test decides water or land
+ * (invariant 6). In the other tiles every sample takes
+ *   min( min_rivers |p - seg| - r,  min_lakes (+/-) |p - lake boundary| )
+ * clamped to [-band, band] pixels, the sign of a lake term being its
+ * even-odd parity at p (invariant 5: union by minimum).
+ *
+ * Inside tests are exact: for every sample row and lake polygon, the
+ * crossings of the polygon's edges with the row are located with __int128
+ * arithmetic as "first sample column right of the crossing" (half-open
+ * rule on y, so a vertex on the row counts once), giving a per-row toggle
+ * list. Parity at (c, r) = toggles at columns <= c.
+ *
+ * Reproducibility (invariant 2): sample and input coordinates are lattice
+ * integers; their differences are formed in int64 and converted to double
+ * exactly (|diff| < 2^53); the rest is plain IEEE double arithmetic with
+ * contraction off (-ffp-contract=off), min and sqrt, all exact functions of
+ * the operands. So a sample's value depends only on its global index and
+ * the input, never on the window or tile that computed it.
+ *
+ * Cost: O(samples in mixed tiles x items in reach + rows x polygon edges
+ * spanning them). Memory: (WM_TILE+1)^2 floats per mixed tile.
+ */
+#include "field.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int64_t floordiv(int64_t a, int64_t b)
+{
+    int64_t q = a / b;
+    if ((a % b != 0) && ((a < 0) != (b < 0)))
+        q--;
+    return q;
+}
+
+static int64_t floordiv128(wm_i128 a, wm_i128 b)
+{
+    wm_i128 q = a / b;
+    if ((a % b != 0) && ((a < 0) != (b < 0)))
+        q--;
+    return (int64_t)q;
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+static int cmp_i32(const void *a, const void *b)
+{
+    const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Sorted, de-duplicated union of the CSR lists of the blocks covering the
+ * window. Caller frees *out. */
+static wm_status gather(const wm_scene *s, const size_t *start,
+                        const uint32_t *items, int64_t bx0, int64_t by0,
+                        int64_t bx1, int64_t by1, uint32_t **out, size_t *n)
+{
+    size_t total = 0;
+    *out = NULL;
+    *n = 0;
+    for (int64_t by = by0; by <= by1; by++)
+        for (int64_t bx = bx0; bx <= bx1; bx++)
+        {
+            const size_t k = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
+            total += start[k + 1] - start[k];
+        }
+    uint32_t *v = malloc((total ? total : 1) * sizeof *v);
+    if (!v)
+        return WM_ERR_NOMEM;
+    size_t m = 0;
+    for (int64_t by = by0; by <= by1; by++)
+        for (int64_t bx = bx0; bx <= bx1; bx++)
+        {
+            const size_t k = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
+            memcpy(v + m, items + start[k],
+                   (start[k + 1] - start[k]) * sizeof *v);
+            m += start[k + 1] - start[k];
+        }
+    if (bx1 > bx0 || by1 > by0)
+    {
+        qsort(v, m, sizeof *v, cmp_u32);
+        size_t u = 0;
+        for (size_t i = 0; i < m; i++)
+            if (u == 0 || v[u - 1] != v[i])
+                v[u++] = v[i];
+        m = u;
+    }
+    *out = v;
+    *n = m;
+    return WM_OK;
+}
+
+/* Working state of one window computation. */
+typedef struct
+{
+    const wm_scene *s;
+    wm_field *f;
+    int64_t X0, Y0; /* lattice of window sample (0, 0) */
+    int64_t tsq;    /* tile side, lattice */
+    uint32_t *segs, *polys;
+    size_t nsegs, npolys;
+    /* tile lists (CSR over ntx*nty) */
+    size_t *tseg_start;
+    uint32_t *tseg;
+    size_t *tedge_start;
+    uint32_t *tedge;      /* global edge index */
+    uint32_t *tedge_poly; /* local polygon index */
+    /* crossings: key = k * h + r */
+    uint8_t *base;
+    size_t *tog_start;
+    int32_t *tog;
+} work;
+
+/* Tile index range touched by the closed box [a, b] (lattice, x or y). */
+static void tile_span(int64_t a, int64_t b, int64_t origin, int64_t tsq,
+                      int32_t nt, int32_t *lo, int32_t *hi)
+{
+    int64_t l = floordiv(a - origin - 1, tsq), h = floordiv(b - origin, tsq);
+    if (l < 0)
+        l = 0;
+    if (h > nt - 1)
+        h = nt - 1;
+    *lo = (int32_t)l;
+    *hi = (int32_t)h;
+}
+
+static wm_status bin_items(work *w)
+{
+    const wm_scene *s = w->s;
+    wm_field *f = w->f;
+    const size_t nt = (size_t)f->ntx * (size_t)f->nty;
+    const int64_t band = (int64_t)s->band * WM_Q + 1;
+    w->tseg_start = calloc(nt + 1, sizeof(size_t));
+    w->tedge_start = calloc(nt + 1, sizeof(size_t));
+    if (!w->tseg_start || !w->tedge_start)
+        return WM_ERR_NOMEM;
+    for (int pass = 0; pass < 2; pass++)
+    {
+        size_t *cs = w->tseg_start + 1, *ce = w->tedge_start + 1;
+        if (pass == 1)
+        {
+            for (size_t t = 0; t < nt; t++)
+            {
+                w->tseg_start[t + 1] += w->tseg_start[t];
+                w->tedge_start[t + 1] += w->tedge_start[t];
+            }
+            w->tseg = malloc((w->tseg_start[nt] + 1) * sizeof *w->tseg);
+            w->tedge = malloc((w->tedge_start[nt] + 1) * sizeof *w->tedge);
+            w->tedge_poly =
+                malloc((w->tedge_start[nt] + 1) * sizeof *w->tedge_poly);
+            if (!w->tseg || !w->tedge || !w->tedge_poly)
+                return WM_ERR_NOMEM;
+            /* reuse the counts as fill cursors: shift starts */
+            cs = malloc((nt + 1) * sizeof *cs);
+            ce = malloc((nt + 1) * sizeof *ce);
+            if (!cs || !ce)
+            {
+                free(cs);
+                free(ce);
+                return WM_ERR_NOMEM;
+            }
+            memcpy(cs, w->tseg_start, nt * sizeof *cs);
+            memcpy(ce, w->tedge_start, nt * sizeof *ce);
+        }
+        for (size_t i = 0; i < w->nsegs; i++)
+        {
+            const wm_river_seg *g = &s->segs[w->segs[i]];
+            const int64_t grow = (int64_t)ceil(g->r) + band;
+            int32_t tx0, tx1, ty0, ty1;
+            tile_span((g->ax < g->bx ? g->ax : g->bx) - grow,
+                      (g->ax > g->bx ? g->ax : g->bx) + grow, w->X0, w->tsq,
+                      f->ntx, &tx0, &tx1);
+            tile_span((g->ay < g->by ? g->ay : g->by) - grow,
+                      (g->ay > g->by ? g->ay : g->by) + grow, w->Y0, w->tsq,
+                      f->nty, &ty0, &ty1);
+            for (int32_t ty = ty0; ty <= ty1; ty++)
+                for (int32_t tx = tx0; tx <= tx1; tx++)
+                {
+                    const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+                    if (pass == 0)
+                        cs[t]++;
+                    else
+                        w->tseg[cs[t]++] = w->segs[i];
+                }
+        }
+        for (size_t k = 0; k < w->npolys; k++)
+        {
+            const uint32_t p = w->polys[k];
+            for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
+            {
+                const wm_lake_edge *g = &s->edges[e];
+                int32_t tx0, tx1, ty0, ty1;
+                tile_span((g->ax < g->bx ? g->ax : g->bx) - band,
+                          (g->ax > g->bx ? g->ax : g->bx) + band, w->X0,
+                          w->tsq, f->ntx, &tx0, &tx1);
+                tile_span((g->ay < g->by ? g->ay : g->by) - band,
+                          (g->ay > g->by ? g->ay : g->by) + band, w->Y0,
+                          w->tsq, f->nty, &ty0, &ty1);
+                for (int32_t ty = ty0; ty <= ty1; ty++)
+                    for (int32_t tx = tx0; tx <= tx1; tx++)
+                    {
+                        const size_t t =
+                            (size_t)ty * (size_t)f->ntx + (size_t)tx;
+                        if (pass == 0)
+                            ce[t]++;
+                        else
+                        {
+                            w->tedge[ce[t]] = (uint32_t)e;
+                            w->tedge_poly[ce[t]++] = (uint32_t)k;
+                        }
+                    }
+            }
+        }
+        if (pass == 1)
+        {
+            free(cs);
+            free(ce);
+        }
+    }
+    return WM_OK;
+}
+
+/* Row crossings of every gathered polygon: base parity (crossings left of
+ * column 0) and sorted toggle columns in 1 .. w-1. */
+static wm_status build_crossings(work *w)
+{
+    const wm_scene *s = w->s;
+    const wm_field *f = w->f;
+    const size_t nkeys = w->npolys * (size_t)f->h;
+    w->base = calloc(nkeys + 1, 1);
+    w->tog_start = calloc(nkeys + 1, sizeof(size_t));
+    if (!w->base || !w->tog_start)
+        return WM_ERR_NOMEM;
+    size_t *cursor = NULL;
+    for (int pass = 0; pass < 2; pass++)
+    {
+        if (pass == 1)
+        {
+            for (size_t k = 0; k < nkeys; k++)
+                w->tog_start[k + 1] += w->tog_start[k];
+            w->tog = malloc((w->tog_start[nkeys] + 1) * sizeof *w->tog);
+            cursor = malloc((nkeys + 1) * sizeof *cursor);
+            if (!w->tog || !cursor)
+            {
+                free(cursor);
+                return WM_ERR_NOMEM;
+            }
+            memcpy(cursor, w->tog_start, nkeys * sizeof *cursor);
+        }
+        for (size_t k = 0; k < w->npolys; k++)
+        {
+            const uint32_t p = w->polys[k];
+            for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
+            {
+                const wm_lake_edge *g = &s->edges[e];
+                if (g->ay == g->by)
+                    continue;
+                int64_t xa = g->ax, ya = g->ay, xb = g->bx, yb = g->by;
+                if (ya > yb)
+                {
+                    xa = g->bx;
+                    ya = g->by;
+                    xb = g->ax;
+                    yb = g->ay;
+                }
+                /* rows with Y in [ya, yb) */
+                int64_t r0 = -floordiv(-ya, WM_Q) - f->gy0;
+                int64_t r1 = -floordiv(-yb, WM_Q) - 1 - f->gy0;
+                if (r0 < 0)
+                    r0 = 0;
+                if (r1 > f->h - 1)
+                    r1 = f->h - 1;
+                const int64_t dy = yb - ya;
+                for (int64_t r = r0; r <= r1; r++)
+                {
+                    const int64_t Y = (f->gy0 + r) * WM_Q;
+                    const wm_i128 num = (wm_i128)(xa - w->X0) * dy +
+                                        (wm_i128)(Y - ya) * (xb - xa);
+                    const int64_t c =
+                        floordiv128(num, (wm_i128)dy * WM_Q) + 1;
+                    const size_t key = k * (size_t)f->h + (size_t)r;
+                    if (c <= 0)
+                    {
+                        if (pass == 0)
+                            w->base[key] ^= 1;
+                    }
+                    else if (c < f->w)
+                    {
+                        if (pass == 0)
+                            w->tog_start[key + 1]++;
+                        else
+                            w->tog[cursor[key]++] = (int32_t)c;
+                    }
+                }
+            }
+        }
+    }
+    free(cursor);
+    for (size_t key = 0; key < nkeys; key++)
+    {
+        const size_t n = w->tog_start[key + 1] - w->tog_start[key];
+        if (n > 1)
+            qsort(w->tog + w->tog_start[key], n, sizeof *w->tog, cmp_i32);
+    }
+    return WM_OK;
+}
+
+/* Even-odd parity of local polygon k at window sample (c, r). */
+static int inside_at(const work *w, size_t k, int32_t c, int32_t r)
+{
+    const size_t key = k * (size_t)w->f->h + (size_t)r;
+    int in = w->base[key];
+    for (size_t i = w->tog_start[key]; i < w->tog_start[key + 1]; i++)
+        if (w->tog[i] <= c)
+            in ^= 1;
+        else
+            break;
+    return in;
+}
+
+#define TS1 (WM_TILE + 1)
+
+/* Vector builds of the per-tile loops: the same IEEE operations (no
+ * contraction, no fast-math) in wider lanes, so every clone gives the same
+ * bits (invariant 2). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define WM_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define WM_CLONES
+#endif
+
+/* d^2 from every sample of a full tile to segment [a, b] into d2[]; (X, Y)
+ * is the lattice position of tile sample (0, 0). Samples beyond the window
+ * are computed too (fixed trip counts vectorize) and never read. */
+WM_CLONES
+static void seg_dist2(int64_t ax, int64_t ay, int64_t bx, int64_t by,
+                      int64_t X, int64_t Y, double *d2)
+{
+    const double abx = (double)(bx - ax), aby = (double)(by - ay);
+    const double len2 = abx * abx + aby * aby;
+    const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
+    const double ox = (double)(X - ax), oy = (double)(Y - ay);
+    for (int32_t j = 0; j < TS1; j++)
+    {
+        const double py = oy + (double)j * WM_Q;
+        double *row = d2 + j * TS1;
+        for (int32_t i = 0; i < TS1; i++)
+        {
+            const double px = ox + (double)i * WM_Q;
+            double t = (px * abx + py * aby) * inv;
+            t = t < 0.0 ? 0.0 : t;
+            t = t > 1.0 ? 1.0 : t;
+            const double dx = px - t * abx, dy = py - t * aby;
+            row[i] = dx * dx + dy * dy;
+        }
+    }
+}
+
+/* v = min(v, |p - seg| - r) over a full tile. */
+WM_CLONES
+static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
+                      double *d2)
+{
+    seg_dist2(g->ax, g->ay, g->bx, g->by, X, Y, d2);
+    const double r = g->r;
+    for (int32_t j = 0; j < TS1 * TS1; j++)
+    {
+        const double d = sqrt(d2[j]) - r;
+        v[j] = d < v[j] ? d : v[j];
+    }
+}
+
+/* du2 = min(du2, d^2 to edge) over a full tile. */
+WM_CLONES
+static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y,
+                      double *du2, double *d2)
+{
+    seg_dist2(g->ax, g->ay, g->bx, g->by, X, Y, d2);
+    for (int32_t j = 0; j < TS1 * TS1; j++)
+        du2[j] = d2[j] < du2[j] ? d2[j] : du2[j];
+}
+
+static wm_status compute_tile(work *w, int32_t tx, int32_t ty,
+                              uint8_t *haspoly)
+{
+    const wm_scene *s = w->s;
+    wm_field *f = w->f;
+    const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+    const int32_t c0 = tx * WM_TILE, r0 = ty * WM_TILE;
+    const int32_t c1 = c0 + WM_TILE < f->w - 1 ? c0 + WM_TILE : f->w - 1;
+    const int32_t r1 = r0 + WM_TILE < f->h - 1 ? r0 + WM_TILE : f->h - 1;
+    const int32_t nx = c1 - c0 + 1, ny = r1 - r0 + 1;
+    const size_t s0 = w->tseg_start[t], s1 = w->tseg_start[t + 1];
+    const size_t e0 = w->tedge_start[t], e1 = w->tedge_start[t + 1];
+
+    /* polygons with edges in reach are evaluated per sample; any other
+     * gathered polygon containing the tile makes it uniform water */
+    for (size_t i = e0; i < e1; i++)
+        haspoly[w->tedge_poly[i]] = 1;
+    int water = 0;
+    const int64_t X = w->X0 + (int64_t)c0 * WM_Q, Y = w->Y0 + (int64_t)r0 * WM_Q;
+    for (size_t k = 0; k < w->npolys && !water; k++)
+    {
+        const wm_box b = s->poly_box[w->polys[k]];
+        if (!haspoly[k] && X >= b.x0 && X <= b.x1 && Y >= b.y0 &&
+            Y <= b.y1 && inside_at(w, k, c0, r0))
+            water = 1;
+    }
+    for (size_t i = e0; i < e1; i++)
+        haspoly[w->tedge_poly[i]] = 0;
+    if (water || (s0 == s1 && e0 == e1))
+    {
+        f->kind[t] = (uint8_t)(water ? WM_TILE_WATER : WM_TILE_LAND);
+        return WM_OK;
+    }
+
+    const double bandl = (double)s->band * WM_Q;
+    double v[TS1 * TS1], d2[TS1 * TS1], du2[TS1 * TS1];
+    for (int32_t i = 0; i < TS1 * TS1; i++)
+        v[i] = bandl;
+    for (size_t i = s0; i < s1; i++)
+        river_min(&s->segs[w->tseg[i]], X, Y, v, d2);
+    for (size_t i = e0; i < e1;)
+    {
+        const uint32_t k = w->tedge_poly[i];
+        for (int32_t j = 0; j < TS1 * TS1; j++)
+            du2[j] = INFINITY;
+        for (; i < e1 && w->tedge_poly[i] == k; i++)
+            edge_min2(&s->edges[w->tedge[i]], X, Y, du2, d2);
+        for (int32_t j = 0; j < ny; j++)
+        {
+            const size_t key = k * (size_t)f->h + (size_t)(r0 + j);
+            int in = w->base[key];
+            size_t ti = w->tog_start[key], te = w->tog_start[key + 1];
+            for (int32_t q = 0; q < nx; q++)
+            {
+                while (ti < te && w->tog[ti] <= c0 + q)
+                {
+                    in ^= 1;
+                    ti++;
+                }
+                const double du = sqrt(du2[j * TS1 + q]);
+                const double d = in ? -du : du;
+                if (d < v[j * TS1 + q])
+                    v[j * TS1 + q] = d;
+            }
+        }
+    }
+    f->pairs += (uint64_t)(nx * ny) * (uint64_t)((s1 - s0) + (e1 - e0));
+
+    int all_land = 1, all_water = 1;
+    for (int32_t j = 0; j < ny; j++)
+        for (int32_t q = 0; q < nx; q++)
+        {
+            const double d = v[j * TS1 + q];
+            all_land &= d >= bandl;
+            all_water &= d <= -bandl;
+        }
+    if (all_land || all_water)
+    {
+        f->kind[t] = (uint8_t)(all_water ? WM_TILE_WATER : WM_TILE_LAND);
+        return WM_OK;
+    }
+    float *out = malloc(sizeof(float) * TS1 * TS1);
+    if (!out)
+        return WM_ERR_NOMEM;
+    for (int32_t j = 0; j < TS1 * TS1; j++)
+    {
+        double d = v[j] < -bandl ? -bandl : v[j];
+        out[j] = (float)(d / WM_Q);
+    }
+    f->val[t] = out;
+    f->kind[t] = WM_TILE_MIXED;
+    f->mixed++;
+    return WM_OK;
+}
+
+wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
+                           int32_t w, int32_t h, wm_field *f,
+                           const wm_ctx *ctx)
+{
+    wm_status st = WM_OK;
+    work wk;
+    uint8_t *haspoly = NULL;
+    memset(&wk, 0, sizeof wk);
+    memset(f, 0, sizeof *f);
+    if (w < 1 || h < 1)
+        return wm_fail(ctx, WM_ERR_INVALID, "empty field window");
+    f->gx0 = gx0;
+    f->gy0 = gy0;
+    f->w = w;
+    f->h = h;
+    f->band = (float)s->band;
+    f->ntx = w > 1 ? (w - 2) / WM_TILE + 1 : 1;
+    f->nty = h > 1 ? (h - 2) / WM_TILE + 1 : 1;
+    const size_t nt = (size_t)f->ntx * (size_t)f->nty;
+    f->kind = calloc(nt, 1);
+    f->val = calloc(nt, sizeof *f->val);
+    if (!f->kind || !f->val)
+        goto nomem;
+    wk.s = s;
+    wk.f = f;
+    wk.X0 = gx0 * WM_Q;
+    wk.Y0 = gy0 * WM_Q;
+    wk.tsq = (int64_t)WM_TILE * WM_Q;
+
+    /* blocks covering the window, clipped to the scene's grid */
+    if (s->nbx > 0)
+    {
+        const int64_t side = (int64_t)s->n * WM_Q;
+        int64_t bx0 = floordiv(wk.X0, side), by0 = floordiv(wk.Y0, side);
+        int64_t bx1 = floordiv(wk.X0 + (int64_t)(w - 1) * WM_Q, side);
+        int64_t by1 = floordiv(wk.Y0 + (int64_t)(h - 1) * WM_Q, side);
+        if (bx0 < s->bx0) bx0 = s->bx0;
+        if (by0 < s->by0) by0 = s->by0;
+        if (bx1 > s->bx0 + s->nbx - 1) bx1 = s->bx0 + s->nbx - 1;
+        if (by1 > s->by0 + s->nby - 1) by1 = s->by0 + s->nby - 1;
+        if (bx0 <= bx1 && by0 <= by1)
+        {
+            st = gather(s, s->blk_seg_start, s->blk_seg, bx0, by0, bx1, by1,
+                        &wk.segs, &wk.nsegs);
+            if (st == WM_OK)
+                st = gather(s, s->blk_poly_start, s->blk_poly, bx0, by0, bx1,
+                            by1, &wk.polys, &wk.npolys);
+            if (st != WM_OK)
+                goto nomem;
+        }
+    }
+    haspoly = calloc(wk.npolys + 1, 1);
+    if (!haspoly || bin_items(&wk) != WM_OK || build_crossings(&wk) != WM_OK)
+        goto nomem;
+    for (int32_t ty = 0; ty < f->nty; ty++)
+        for (int32_t tx = 0; tx < f->ntx; tx++)
+            if (compute_tile(&wk, tx, ty, haspoly) != WM_OK)
+                goto nomem;
+    goto cleanup;
+nomem:
+    st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory computing the field");
+    wm_field_free(f);
+cleanup:
+    free(haspoly);
+    free(wk.segs);
+    free(wk.polys);
+    free(wk.tseg_start);
+    free(wk.tseg);
+    free(wk.tedge_start);
+    free(wk.tedge);
+    free(wk.tedge_poly);
+    free(wk.base);
+    free(wk.tog_start);
+    free(wk.tog);
+    return st;
+}
+
+float wm_field_at(const wm_field *f, int32_t c, int32_t r)
+{
+    int32_t tx = c > 0 ? (c - 1) / WM_TILE : 0;
+    int32_t ty = r > 0 ? (r - 1) / WM_TILE : 0;
+    if (tx >= f->ntx)
+        tx = f->ntx - 1;
+    if (ty >= f->nty)
+        ty = f->nty - 1;
+    const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+    switch (f->kind[t])
+    {
+    case WM_TILE_WATER:
+        return -f->band;
+    case WM_TILE_LAND:
+        return f->band;
+    default:
+        return f->val[t][(r - ty * WM_TILE) * TS1 + (c - tx * WM_TILE)];
+    }
+}
+
+void wm_field_free(wm_field *f)
+{
+    if (!f)
+        return;
+    if (f->val)
+    {
+        const size_t nt = (size_t)f->ntx * (size_t)f->nty;
+        for (size_t t = 0; t < nt; t++)
+            free(f->val[t]);
+    }
+    free(f->val);
+    free(f->kind);
+    memset(f, 0, sizeof *f);
+}

@@ -1,0 +1,127 @@
+/*
+ * lattice.c - the out-of-line exact predicates and the ring container.
+ */
+#include "lattice.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+wm_status wm_fail(const wm_ctx *ctx, wm_status status, const char *fmt, ...)
+{
+    if (ctx && ctx->error)
+    {
+        char msg[512];
+        va_list ap;
+        va_start(ap, fmt);
+        vsnprintf(msg, sizeof msg, fmt, ap);
+        va_end(ap);
+        ctx->error(ctx->user, status, msg);
+    }
+    return status;
+}
+
+void wm_rings_clear(wm_rings *r)
+{
+    r->npts = 0;
+    r->nrings = 0;
+    if (r->start)
+        r->start[0] = 0;
+}
+
+void wm_rings_free(wm_rings *r)
+{
+    if (!r)
+        return;
+    free(r->pts);
+    free(r->start);
+    memset(r, 0, sizeof *r);
+}
+
+static int grow(void **buf, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return 1;
+    size_t ncap = *cap ? *cap : 16;
+    while (ncap < need)
+    {
+        if (ncap > SIZE_MAX / 2 / elem)
+            return 0;
+        ncap *= 2;
+    }
+    void *p = realloc(*buf, ncap * elem);
+    if (!p)
+        return 0;
+    *buf = p;
+    *cap = ncap;
+    return 1;
+}
+
+wm_status wm_rings_push(wm_rings *r, wm_pt p)
+{
+    if (!grow((void **)&r->pts, &r->pts_cap, r->npts + 1, sizeof *r->pts))
+        return WM_ERR_NOMEM;
+    r->pts[r->npts++] = p;
+    return WM_OK;
+}
+
+wm_status wm_rings_close(wm_rings *r)
+{
+    if (!grow((void **)&r->start, &r->start_cap, r->nrings + 2,
+              sizeof *r->start))
+        return WM_ERR_NOMEM;
+    if (r->nrings == 0)
+        r->start[0] = 0;
+    r->start[++r->nrings] = r->npts;
+    return WM_OK;
+}
+
+wm_i128 wm_ring_area2(const wm_pt *pts, size_t n)
+{
+    wm_i128 a = 0;
+    for (size_t i = 0; i < n; i++)
+    {
+        const wm_pt p = pts[i], q = pts[(i + 1) % n];
+        a += (wm_i128)((int64_t)p.x * q.y - (int64_t)q.x * p.y);
+    }
+    return a;
+}
+
+int wm_seg_dist2_exceeds(wm_pt a, wm_pt b, wm_pt p, wm_i128 tol2)
+{
+    const int64_t abx = (int64_t)b.x - a.x, aby = (int64_t)b.y - a.y;
+    const int64_t apx = (int64_t)p.x - a.x, apy = (int64_t)p.y - a.y;
+    const int64_t len2 = abx * abx + aby * aby;
+    const int64_t dot = abx * apx + aby * apy;
+    if (len2 == 0 || dot <= 0)
+        return (wm_i128)(apx * apx + apy * apy) > tol2;
+    if (dot >= len2)
+    {
+        const int64_t bpx = (int64_t)p.x - b.x, bpy = (int64_t)p.y - b.y;
+        return (wm_i128)(bpx * bpx + bpy * bpy) > tol2;
+    }
+    /* perpendicular: cross^2 / len2 > tol2  <=>  cross^2 > tol2 * len2 */
+    const wm_i128 cross = (wm_i128)(abx * apy - aby * apx);
+    return cross * cross > tol2 * (wm_i128)len2;
+}
+
+int wm_point_in_ring(const wm_pt *ring, size_t n, wm_pt p)
+{
+    int inside = 0;
+    for (size_t i = 0, j = n - 1; i < n; j = i++)
+    {
+        const wm_pt a = ring[j], b = ring[i];
+        if (wm_on_segment(a, b, p))
+            return -1;
+        /* half-open rule on y: the edge counts when p.y is in [min, max) */
+        if ((a.y > p.y) != (b.y > p.y))
+        {
+            /* crossing x > p.x  <=>  orientation sign matches edge direction */
+            const int o = wm_orient(a, b, p);
+            if ((b.y > a.y) ? (o > 0) : (o < 0))
+                inside = !inside;
+        }
+    }
+    return inside;
+}

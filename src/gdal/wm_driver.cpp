@@ -1,0 +1,557 @@
+/*
+ * wm_driver.cpp - the WATERMESH GDAL driver: thin C++ glue over the C
+ * pipeline (wm_private.h). A dataset opened from "WATERMESH:" plus open
+ * options, or from a .watermesh descriptor, exposes
+ *   - vector layers `water` and `mesh`, computed lazily block by block
+ *     (only the blocks the spatial filter touches), and
+ *   - a Float32 raster band: the signed distance field in metres on the
+ *     global sample grid, computed per raster block on demand.
+ * No C++ exception crosses into GDAL: every entry point catches.
+ */
+#include "wm_private.h"
+
+#include "../core/field.h"
+
+#include <gdal_priv.h>
+#include <ogrsf_frmts.h>
+
+#include <algorithm>
+#include <climits>
+#include <cstring>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <new>
+#include <utility>
+#include <vector>
+
+namespace
+{
+
+constexpr int RASTER_BLOCK = 256;
+
+struct ResultDeleter
+{
+    void operator()(wm_block_result *r) const
+    {
+        wm_block_result_free(r);
+        delete r;
+    }
+};
+using ResultPtr = std::shared_ptr<wm_block_result>;
+
+class WaterMeshLayer;
+
+class WaterMeshDataset final : public GDALDataset
+{
+    friend class WaterMeshLayer;
+    friend class WaterMeshBand;
+    WMScene *m_poScene = nullptr;
+    std::vector<std::unique_ptr<WaterMeshLayer>> m_apoLayers;
+    std::map<std::pair<int64_t, int64_t>, ResultPtr> m_oCache;
+
+  public:
+    WaterMeshDataset() = default;
+    ~WaterMeshDataset() override;
+
+    static int Identify(GDALOpenInfo *poOpenInfo);
+    static GDALDataset *Open(GDALOpenInfo *poOpenInfo);
+
+    int GetLayerCount() override
+    {
+        return static_cast<int>(m_apoLayers.size());
+    }
+    OGRLayer *GetLayer(int i) override;
+    int TestCapability(const char *) override
+    {
+        return FALSE;
+    }
+    CPLErr GetGeoTransform(double *padfGT) override;
+    const OGRSpatialReference *GetSpatialRef() const override
+    {
+        return nBands ? OGRSpatialReference::FromHandle(
+                                  m_poScene->hSRS)
+                            : nullptr;
+    }
+
+    /** Results of the blocks touching env (all if null), in block order. */
+    bool GetBlocks(const OGREnvelope *env, std::vector<ResultPtr> &out);
+};
+
+class WaterMeshLayer final
+    : public OGRLayer,
+      public OGRGetNextFeatureThroughRaw<WaterMeshLayer>
+{
+    WaterMeshDataset *m_poDS;
+    bool m_bMesh;
+    OGRFeatureDefn *m_poDefn;
+    std::vector<ResultPtr> m_aoBlocks;
+    bool m_bComputed = false;
+    size_t m_iBlock = 0, m_iPoly = 0;
+
+  public:
+    WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh);
+    ~WaterMeshLayer() override;
+
+    OGRFeatureDefn *GetLayerDefn() override
+    {
+        return m_poDefn;
+    }
+    void ResetReading() override
+    {
+        m_bComputed = false;
+        m_aoBlocks.clear();
+        m_iBlock = m_iPoly = 0;
+    }
+    OGRFeature *GetNextRawFeature();
+    DEFINE_GET_NEXT_FEATURE_THROUGH_RAW(WaterMeshLayer)
+    GIntBig GetFeatureCount(int bForce) override;
+    OGRErr GetExtent(OGREnvelope *psExtent, int bForce) override;
+    OGRErr GetExtent(int iGeomField, OGREnvelope *psExtent,
+                     int bForce) override
+    {
+        return iGeomField == 0 ? GetExtent(psExtent, bForce)
+                               : OGRLayer::GetExtent(iGeomField, psExtent,
+                                                     bForce);
+    }
+    int TestCapability(const char *pszCap) override;
+};
+
+class WaterMeshBand final : public GDALRasterBand
+{
+  public:
+    WaterMeshBand(WaterMeshDataset *poDS, int nX, int nY)
+    {
+        this->poDS = poDS;
+        nBand = 1;
+        eDataType = GDT_Float32;
+        nRasterXSize = nX;
+        nRasterYSize = nY;
+        nBlockXSize = RASTER_BLOCK;
+        nBlockYSize = RASTER_BLOCK;
+        SetDescription("signed distance (m), negative in water");
+    }
+    CPLErr IReadBlock(int nBlockXOff, int nBlockYOff, void *pImage) override;
+    const char *GetUnitType() override
+    {
+        return "m";
+    }
+};
+
+/* ------------------------------------------------------------------ */
+
+WaterMeshDataset::~WaterMeshDataset()
+{
+    m_apoLayers.clear();
+    m_oCache.clear();
+    WMSceneFree(m_poScene);
+}
+
+OGRLayer *WaterMeshDataset::GetLayer(int i)
+{
+    if (i < 0 || i >= GetLayerCount())
+        return nullptr;
+    return m_apoLayers[static_cast<size_t>(i)].get();
+}
+
+CPLErr WaterMeshDataset::GetGeoTransform(double *gt)
+{
+    if (!nBands)
+        return CE_Failure;
+    const wm_scene &c = m_poScene->core;
+    const double px = m_poScene->params.pixel;
+    gt[0] = static_cast<double>(c.bx0 * c.n) * px - px / 2;
+    gt[1] = px;
+    gt[2] = 0;
+    gt[3] = static_cast<double>((c.by0 + c.nby) * c.n) * px + px / 2;
+    gt[4] = 0;
+    gt[5] = -px;
+    return CE_None;
+}
+
+struct CacheSink
+{
+    WaterMeshDataset *ds;
+    std::map<std::pair<int64_t, int64_t>, ResultPtr> *cache;
+};
+
+static int cache_sink(void *user, wm_block_result *res)
+{
+    auto *s = static_cast<CacheSink *>(user);
+    try
+    {
+        ResultPtr p(new wm_block_result(*res), ResultDeleter());
+        (*s->cache)[{res->bx, res->by}] = p;
+        return TRUE;
+    }
+    catch (const std::exception &)
+    {
+        wm_block_result_free(res);
+        CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
+        return FALSE;
+    }
+}
+
+bool WaterMeshDataset::GetBlocks(const OGREnvelope *env,
+                                 std::vector<ResultPtr> &out)
+{
+    double spat[4];
+    if (env)
+    {
+        spat[0] = env->MinX;
+        spat[1] = env->MinY;
+        spat[2] = env->MaxX;
+        spat[3] = env->MaxY;
+    }
+    int64_t *blocks = nullptr;
+    size_t n = 0;
+    if (!WMSceneBlocks(m_poScene, env ? spat : nullptr, &blocks, &n))
+        return false;
+    std::vector<int64_t> todo;
+    for (size_t i = 0; i < n; i++)
+        if (!m_oCache.count({blocks[2 * i], blocks[2 * i + 1]}))
+        {
+            todo.push_back(blocks[2 * i]);
+            todo.push_back(blocks[2 * i + 1]);
+        }
+    bool ok = true;
+    if (!todo.empty())
+    {
+        CacheSink sink{this, &m_oCache};
+        WMRunStats st;
+        ok = WMRunBlocks(m_poScene, todo.data(), todo.size() / 2, cache_sink,
+                         &sink, nullptr, nullptr, &st) == CE_None;
+    }
+    out.clear();
+    for (size_t i = 0; ok && i < n; i++)
+        out.push_back(m_oCache[{blocks[2 * i], blocks[2 * i + 1]}]);
+    VSIFree(blocks);
+    return ok;
+}
+
+/* ------------------------------------------------------------------ */
+
+WaterMeshLayer::WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh)
+    : m_poDS(poDS), m_bMesh(bMesh),
+      m_poDefn(new OGRFeatureDefn(bMesh ? "mesh" : "water"))
+{
+    SetDescription(m_poDefn->GetName());
+    m_poDefn->Reference();
+    m_poDefn->SetGeomType(bMesh ? wkbMultiPolygon : wkbPolygon);
+    m_poDefn->GetGeomFieldDefn(0)->SetSpatialRef(
+        OGRSpatialReference::FromHandle(poDS->m_poScene->hSRS));
+    OGRFieldDefn oBX("block_x", OFTInteger), oBY("block_y", OFTInteger);
+    m_poDefn->AddFieldDefn(&oBX);
+    m_poDefn->AddFieldDefn(&oBY);
+    OGRFieldDefn oLast(bMesh ? "triangles" : "area",
+                       bMesh ? OFTInteger : OFTReal);
+    m_poDefn->AddFieldDefn(&oLast);
+}
+
+WaterMeshLayer::~WaterMeshLayer()
+{
+    m_poDefn->Release();
+}
+
+OGRFeature *WaterMeshLayer::GetNextRawFeature()
+{
+    try
+    {
+        if (!m_bComputed)
+        {
+            OGREnvelope env;
+            if (m_poFilterGeom)
+                m_poFilterGeom->getEnvelope(&env);
+            m_bComputed = true;
+            if (!m_poDS->GetBlocks(m_poFilterGeom ? &env : nullptr,
+                                   m_aoBlocks))
+                return nullptr;
+        }
+        while (m_iBlock < m_aoBlocks.size() &&
+               m_iPoly >= m_aoBlocks[m_iBlock]->npolys)
+        {
+            m_iBlock++;
+            m_iPoly = 0;
+        }
+        if (m_iBlock >= m_aoBlocks.size())
+            return nullptr;
+        const wm_block_result *r = m_aoBlocks[m_iBlock].get();
+        const size_t p = m_iPoly++;
+        const WMScene *s = m_poDS->m_poScene;
+        auto poFeature = new OGRFeature(m_poDefn);
+        /* stable FID: block's place in the scene grid, polygon index */
+        const GIntBig blk = (r->by - s->core.by0) * s->core.nbx +
+                            (r->bx - s->core.bx0);
+        poFeature->SetFID((blk << 24) + static_cast<GIntBig>(p));
+        poFeature->SetField(0, static_cast<int>(r->bx));
+        poFeature->SetField(1, static_cast<int>(r->by));
+        OGRGeometryH hGeom;
+        if (m_bMesh)
+        {
+            poFeature->SetField(
+                2, static_cast<int>(r->poly_tri[p + 1] - r->poly_tri[p]));
+            hGeom = WMMeshGeometry(s, r, p);
+        }
+        else
+        {
+            poFeature->SetField(2, WMPolygonArea(s, r, p));
+            hGeom = WMPolygonGeometry(s, r, p);
+        }
+        OGRGeometry *poGeom = OGRGeometry::FromHandle(hGeom);
+        poGeom->assignSpatialReference(
+            m_poDefn->GetGeomFieldDefn(0)->GetSpatialRef());
+        poFeature->SetGeometryDirectly(poGeom);
+        return poFeature;
+    }
+    catch (const std::exception &e)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined, "WATERMESH: %s", e.what());
+        return nullptr;
+    }
+}
+
+GIntBig WaterMeshLayer::GetFeatureCount(int bForce)
+{
+    if (m_poFilterGeom || m_poAttrQuery)
+        return OGRLayer::GetFeatureCount(bForce);
+    try
+    {
+        std::vector<ResultPtr> blocks;
+        if (!m_poDS->GetBlocks(nullptr, blocks))
+            return -1;
+        GIntBig n = 0;
+        for (const auto &b : blocks)
+            n += static_cast<GIntBig>(b->npolys);
+        return n;
+    }
+    catch (const std::exception &)
+    {
+        return -1;
+    }
+}
+
+OGRErr WaterMeshLayer::GetExtent(OGREnvelope *psExtent, int)
+{
+    const wm_scene &c = m_poDS->m_poScene->core;
+    if (c.nbx == 0)
+        return OGRERR_FAILURE;
+    const double bs = m_poDS->m_poScene->params.block;
+    psExtent->MinX = static_cast<double>(c.bx0) * bs;
+    psExtent->MinY = static_cast<double>(c.by0) * bs;
+    psExtent->MaxX = static_cast<double>(c.bx0 + c.nbx) * bs;
+    psExtent->MaxY = static_cast<double>(c.by0 + c.nby) * bs;
+    return OGRERR_NONE;
+}
+
+int WaterMeshLayer::TestCapability(const char *pszCap)
+{
+    if (EQUAL(pszCap, OLCFastFeatureCount))
+        return m_poFilterGeom == nullptr && m_poAttrQuery == nullptr;
+    if (EQUAL(pszCap, OLCFastGetExtent))
+        return TRUE;
+    if (EQUAL(pszCap, OLCStringsAsUTF8))
+        return TRUE;
+    return FALSE;
+}
+
+/* ------------------------------------------------------------------ */
+
+CPLErr WaterMeshBand::IReadBlock(int nBlockXOff, int nBlockYOff,
+                                 void *pImage)
+{
+    auto *ds = static_cast<WaterMeshDataset *>(poDS);
+    const wm_scene &c = ds->m_poScene->core;
+    const int c0 = nBlockXOff * RASTER_BLOCK, k0 = nBlockYOff * RASTER_BLOCK;
+    const int wc = std::min(RASTER_BLOCK, nRasterXSize - c0);
+    const int hc = std::min(RASTER_BLOCK, nRasterYSize - k0);
+    const int64_t gx0 = c.bx0 * c.n + c0;
+    const int64_t gytop = (c.by0 + c.nby) * c.n - k0;
+    float *out = static_cast<float *>(pImage);
+    const float band = static_cast<float>(c.band * ds->m_poScene->params.pixel);
+    for (int i = 0; i < RASTER_BLOCK * RASTER_BLOCK; i++)
+        out[i] = band;
+    wm_field f;
+    char *msg = nullptr;
+    auto collect = [](void *user, wm_status, const char *m)
+    {
+        char **dst = static_cast<char **>(user);
+        if (!*dst)
+            *dst = CPLStrdup(m);
+    };
+    wm_ctx ctx = {collect, &msg};
+    if (wm_field_compute(&c, gx0, gytop - hc + 1, wc, hc, &f, &ctx) != WM_OK)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined, "WATERMESH: %s",
+                 msg ? msg : "field computation failed");
+        CPLFree(msg);
+        return CE_Failure;
+    }
+    const float px = static_cast<float>(ds->m_poScene->params.pixel);
+    for (int row = 0; row < hc; row++)
+        for (int col = 0; col < wc; col++)
+            out[row * RASTER_BLOCK + col] =
+                wm_field_at(&f, col, hc - 1 - row) * px;
+    wm_field_free(&f);
+    return CE_None;
+}
+
+/* ------------------------------------------------------------------ */
+
+int WaterMeshDataset::Identify(GDALOpenInfo *poOpenInfo)
+{
+    if (STARTS_WITH_CI(poOpenInfo->pszFilename, "WATERMESH:"))
+        return TRUE;
+    if (EQUAL(CPLGetExtension(poOpenInfo->pszFilename), "watermesh"))
+        return TRUE;
+    return poOpenInfo->pabyHeader != nullptr &&
+           strstr(reinterpret_cast<const char *>(poOpenInfo->pabyHeader),
+                  "<WaterMesh") != nullptr;
+}
+
+GDALDataset *WaterMeshDataset::Open(GDALOpenInfo *poOpenInfo)
+{
+    if (!Identify(poOpenInfo))
+        return nullptr;
+    if (poOpenInfo->eAccess == GA_Update)
+        return nullptr; /* read-only; quiet so ogrinfo/QGIS retry */
+    char **papszOpts = nullptr;
+    if (!STARTS_WITH_CI(poOpenInfo->pszFilename, "WATERMESH:"))
+    {
+        papszOpts = WMReadDescriptor(poOpenInfo->pszFilename);
+        if (!papszOpts)
+            return nullptr;
+    }
+    else
+    {
+        const char *rest = poOpenInfo->pszFilename + strlen("WATERMESH:");
+        if (*rest)
+        {
+            CPLError(CE_Failure, CPLE_OpenFailed,
+                     "WATERMESH: unexpected text after 'WATERMESH:' (%s); "
+                     "give inputs as open options (-oo RIVERS=...).",
+                     rest);
+            return nullptr;
+        }
+    }
+    /* open options override descriptor elements */
+    for (CSLConstList p = poOpenInfo->papszOpenOptions; p && *p; ++p)
+    {
+        char *key = nullptr;
+        const char *val = CPLParseNameValue(*p, &key);
+        if (key && val)
+            papszOpts = CSLSetNameValue(papszOpts, key, val);
+        CPLFree(key);
+    }
+    WMSources src;
+    if (!WMSourcesOpen(papszOpts, &src))
+    {
+        CSLDestroy(papszOpts);
+        return nullptr;
+    }
+    WMScene *scene = WMSceneBuild(src.hRivers, src.hLakes, papszOpts);
+    WMSourcesClose(&src);
+    CSLDestroy(papszOpts);
+    if (!scene)
+        return nullptr;
+    try
+    {
+        auto poDS = std::make_unique<WaterMeshDataset>();
+        poDS->m_poScene = scene;
+        poDS->SetDescription(poOpenInfo->pszFilename);
+        if (poOpenInfo->nOpenFlags & GDAL_OF_VECTOR)
+        {
+            poDS->m_apoLayers.emplace_back(
+                new WaterMeshLayer(poDS.get(), false));
+            poDS->m_apoLayers.emplace_back(
+                new WaterMeshLayer(poDS.get(), true));
+        }
+        if ((poOpenInfo->nOpenFlags & GDAL_OF_RASTER) && scene->core.nbx > 0)
+        {
+            const double w = static_cast<double>(scene->core.nbx) *
+                                 scene->core.n + 1,
+                         h = static_cast<double>(scene->core.nby) *
+                                 scene->core.n + 1;
+            if (w > INT_MAX || h > INT_MAX)
+            {
+                CPLError(CE_Failure, CPLE_AppDefined,
+                         "WATERMESH: the raster view would be %.0f x %.0f "
+                         "pixels, more than GDAL supports; use a larger "
+                         "PIXEL_SIZE.",
+                         w, h);
+                return nullptr;
+            }
+            poDS->nRasterXSize = static_cast<int>(w);
+            poDS->nRasterYSize = static_cast<int>(h);
+            poDS->SetBand(1, new WaterMeshBand(poDS.get(), poDS->nRasterXSize,
+                                               poDS->nRasterYSize));
+        }
+        return poDS.release();
+    }
+    catch (const std::exception &e)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined, "WATERMESH: %s", e.what());
+        return nullptr;
+    }
+}
+
+}  // namespace
+
+static const char OPEN_OPTIONS[] =
+    "<OpenOptionList>"
+    "  <Option name='RIVERS' type='string' description='River centerlines "
+    "datasource (lines)'/>"
+    "  <Option name='RIVERS_LAYER' type='string' description='Rivers layer "
+    "name (default: first layer)'/>"
+    "  <Option name='RIVERS_WHERE' type='string' description='Attribute "
+    "filter on rivers'/>"
+    "  <Option name='LAKES' type='string' description='Lakes datasource "
+    "(polygons)'/>"
+    "  <Option name='LAKES_LAYER' type='string' description='Lakes layer "
+    "name (default: first layer)'/>"
+    "  <Option name='LAKES_WHERE' type='string' description='Attribute "
+    "filter on lakes'/>"
+    "  <Option name='WIDTH' type='float' default='10' description='Default "
+    "river width in metres'/>"
+    "  <Option name='WIDTH_FIELD' type='string' description='River field "
+    "holding the width (number, or text such as \"2.5 m\")'/>"
+    "  <Option name='PIXEL_SIZE' type='float' default='0.5' "
+    "description='Sample spacing in metres'/>"
+    "  <Option name='BLOCK_SIZE' type='float' default='4096' "
+    "description='Block side in metres, a multiple of PIXEL_SIZE'/>"
+    "  <Option name='SIMPLIFY' type='float' description='Douglas-Peucker "
+    "tolerance in metres (default PIXEL_SIZE, 0 disables)'/>"
+    "  <Option name='METHOD' type='string-select' default='CONTOUR'>"
+    "    <Value>CONTOUR</Value>"
+    "  </Option>"
+    "  <Option name='DEVICE' type='string-select' default='AUTO'>"
+    "    <Value>AUTO</Value><Value>CPU</Value><Value>OPENCL</Value>"
+    "  </Option>"
+    "  <Option name='NUM_THREADS' type='string' default='ALL_CPUS' "
+    "description='Number of threads, or ALL_CPUS'/>"
+    "  <Option name='TARGET_SRS' type='string' description='Working CRS "
+    "(projected, metres)'/>"
+    "</OpenOptionList>";
+
+extern "C" void CPL_DLL GDALRegister_WATERMESH();
+
+extern "C" void GDALRegister_WATERMESH()
+{
+    if (!GDAL_CHECK_VERSION("WATERMESH"))
+        return;
+    if (GDALGetDriverByName("WATERMESH") != nullptr)
+        return;
+    auto poDriver = new GDALDriver();
+    poDriver->SetDescription("WATERMESH");
+    poDriver->SetMetadataItem(GDAL_DCAP_RASTER, "YES");
+    poDriver->SetMetadataItem(GDAL_DCAP_VECTOR, "YES");
+    poDriver->SetMetadataItem(GDAL_DMD_LONGNAME,
+                              "Water mesh from rivers and lakes (watermesh " PACKAGE_VERSION ")");
+    poDriver->SetMetadataItem(GDAL_DMD_HELPTOPIC, "docs/driver.rst");
+    poDriver->SetMetadataItem(GDAL_DMD_EXTENSIONS, "watermesh");
+    poDriver->SetMetadataItem(GDAL_DMD_CONNECTION_PREFIX, "WATERMESH:");
+    poDriver->SetMetadataItem(GDAL_DMD_OPENOPTIONLIST, OPEN_OPTIONS);
+    poDriver->SetMetadataItem(GDAL_DCAP_VIRTUALIO, "YES");
+    poDriver->pfnIdentify = WaterMeshDataset::Identify;
+    poDriver->pfnOpen = WaterMeshDataset::Open;
+    GetGDALDriverManager()->RegisterDriver(poDriver);
+}

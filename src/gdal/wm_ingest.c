@@ -1,0 +1,649 @@
+/*
+ * wm_ingest.c - scene ingestion: reads the river and lake layers, checks
+ * them, reprojects to the working CRS, reads widths, and quantizes every
+ * coordinate once to the global lattice (DESIGN invariant 2).
+ *
+ * Input policy (documented in docs/driver.rst):
+ * - rivers: LineString / MultiLineString (curves linearized); points and
+ *   polygons are refused; empty and NULL geometries skipped; a river whose
+ *   vertices all quantize to one point is skipped with a warning.
+ * - lakes: Polygon / MultiPolygon (curves linearized); each polygon part is
+ *   filled even-odd over its rings and parts union; lines and points are
+ *   refused.
+ * - Z and M are ignored; NaN or infinite coordinates are an error naming
+ *   the feature.
+ */
+#include "config.h"
+
+#include "wm_private.h"
+
+#include <cpl_conv.h>
+#include <cpl_string.h>
+
+#include <ctype.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *WMVersion(void)
+{
+    return PACKAGE_VERSION;
+}
+
+static OGRSpatialReferenceH layer_srs(OGRLayerH h)
+{
+    OGRSpatialReferenceH s = h ? OGR_L_GetSpatialRef(h) : NULL;
+    return s;
+}
+
+static OGRSpatialReferenceH clone_trad(OGRSpatialReferenceH s)
+{
+    OGRSpatialReferenceH c = OSRClone(s);
+    OSRSetAxisMappingStrategy(c, OAMS_TRADITIONAL_GIS_ORDER);
+    return c;
+}
+
+OGRSpatialReferenceH WMGetWorkingSRS(OGRLayerH hRivers, OGRLayerH hLakes,
+                                     CSLConstList opts)
+{
+    const char *target = CSLFetchNameValue(opts, "TARGET_SRS");
+    if (target && *target)
+    {
+        OGRSpatialReferenceH s = OSRNewSpatialReference(NULL);
+        if (OSRSetFromUserInput(s, target) != OGRERR_NONE)
+        {
+            OSRRelease(s);
+            CPLError(CE_Failure, CPLE_IllegalArg,
+                     "WATERMESH: TARGET_SRS=%s is not a valid CRS.", target);
+            return NULL;
+        }
+        if (!OSRIsProjected(s))
+        {
+            OSRRelease(s);
+            CPLError(CE_Failure, CPLE_IllegalArg,
+                     "WATERMESH: TARGET_SRS=%s is not a projected CRS "
+                     "(distances must be in metres).",
+                     target);
+            return NULL;
+        }
+        OSRSetAxisMappingStrategy(s, OAMS_TRADITIONAL_GIS_ORDER);
+        return s;
+    }
+    OGRSpatialReferenceH r = layer_srs(hRivers), l = layer_srs(hLakes);
+    if ((hRivers && !r) || (hLakes && !l))
+    {
+        OGRLayerH h = (hRivers && !r) ? hRivers : hLakes;
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: %s layer '%s' has no CRS; set TARGET_SRS to "
+                 "say which CRS it is in.",
+                 h == hRivers ? "RIVERS" : "LAKES", OGR_L_GetName(h));
+        return NULL;
+    }
+    if (r && OSRIsProjected(r))
+        return clone_trad(r);
+    if (l && OSRIsProjected(l))
+        return clone_trad(l);
+    /* geographic: UTM zone of the centre of the inputs' extents */
+    OGRSpatialReferenceH g = r ? r : l;
+    double sx = 0, sy = 0;
+    int n = 0;
+    OGRLayerH hl[2] = {hRivers, hLakes};
+    for (int i = 0; i < 2; i++)
+    {
+        OGREnvelope e;
+        if (hl[i] && OGR_L_GetExtent(hl[i], &e, TRUE) == OGRERR_NONE)
+        {
+            OGRSpatialReferenceH ls = clone_trad(layer_srs(hl[i]));
+            OGRSpatialReferenceH ll = OSRNewSpatialReference(NULL);
+            OSRSetWellKnownGeogCS(ll, "WGS84");
+            OSRSetAxisMappingStrategy(ll, OAMS_TRADITIONAL_GIS_ORDER);
+            OGRCoordinateTransformationH ct =
+                OCTNewCoordinateTransformation(ls, ll);
+            double x = (e.MinX + e.MaxX) / 2, y = (e.MinY + e.MaxY) / 2;
+            if (ct && OCTTransform(ct, 1, &x, &y, NULL))
+            {
+                sx += x;
+                sy += y;
+                n++;
+            }
+            if (ct)
+                OCTDestroyCoordinateTransformation(ct);
+            OSRRelease(ls);
+            OSRRelease(ll);
+        }
+    }
+    (void)g;
+    if (n == 0)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: the inputs are geographic and their extent "
+                 "could not be read; set TARGET_SRS.");
+        return NULL;
+    }
+    const double lon = sx / n, lat = sy / n;
+    int zone = (int)floor((lon + 180.0) / 6.0) + 1;
+    if (zone < 1)
+        zone = 1;
+    if (zone > 60)
+        zone = 60;
+    const int epsg = (lat >= 0 ? 32600 : 32700) + zone;
+    OGRSpatialReferenceH u = OSRNewSpatialReference(NULL);
+    OSRImportFromEPSG(u, epsg);
+    OSRSetAxisMappingStrategy(u, OAMS_TRADITIONAL_GIS_ORDER);
+    CPLError(CE_Warning, CPLE_AppDefined,
+             "WATERMESH: the inputs are geographic; computing in UTM zone "
+             "%d%c (EPSG:%d). Set TARGET_SRS to choose another CRS.",
+             zone, lat >= 0 ? 'N' : 'S', epsg);
+    return u;
+}
+
+/* Growable arrays for the scene. */
+typedef struct
+{
+    wm_river_seg *segs;
+    size_t nsegs, segs_cap;
+    wm_lake_edge *edges;
+    size_t nedges, edges_cap;
+    size_t *poly_start;
+    size_t npolys, poly_cap;
+    int64_t *px, *py; /* quantized points of the current line or ring */
+    size_t npts, pts_cap;
+} builder;
+
+static int reserve(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap)
+        return TRUE;
+    size_t n = *cap ? *cap : 256;
+    while (n < need)
+        n *= 2;
+    void *q = VSIRealloc(*p, n * elem);
+    if (!q)
+    {
+        CPLError(CE_Failure, CPLE_OutOfMemory,
+                 "WATERMESH: out of memory reading the input.");
+        return FALSE;
+    }
+    *p = q;
+    *cap = n;
+    return TRUE;
+}
+
+typedef struct
+{
+    const char *role;
+    OGRLayerH layer;
+    GIntBig fid;
+    double unit;
+    OGRCoordinateTransformationH ct;
+} feat_ctx;
+
+/* Quantizes the points of a simple curve (LineString/LinearRing) into
+ * b->px/py, dropping consecutive duplicates. */
+static int read_points(builder *b, OGRGeometryH g, const feat_ctx *fc)
+{
+    const int n = OGR_G_GetPointCount(g);
+    b->npts = 0;
+    if (!reserve((void **)&b->px, &b->pts_cap, (size_t)n + 1, sizeof(int64_t)))
+        return FALSE;
+    size_t cap2 = b->pts_cap;
+    (void)cap2;
+    b->py = VSIRealloc(b->py, b->pts_cap * sizeof(int64_t));
+    if (!b->py)
+    {
+        CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
+        return FALSE;
+    }
+    for (int i = 0; i < n; i++)
+    {
+        double x = OGR_G_GetX(g, i), y = OGR_G_GetY(g, i);
+        if (!isfinite(x) || !isfinite(y))
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: %s layer '%s', feature " CPL_FRMT_GIB
+                     ": coordinate %d is not finite (%g, %g).",
+                     fc->role, OGR_L_GetName(fc->layer), fc->fid, i, x, y);
+            return FALSE;
+        }
+        if (fc->ct && !OCTTransform(fc->ct, 1, &x, &y, NULL))
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: %s layer '%s', feature " CPL_FRMT_GIB
+                     ": coordinate %d cannot be reprojected to the working "
+                     "CRS.",
+                     fc->role, OGR_L_GetName(fc->layer), fc->fid, i);
+            return FALSE;
+        }
+        const double qx = x / fc->unit, qy = y / fc->unit;
+        if (!(fabs(qx) < 4e15) || !(fabs(qy) < 4e15))
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: %s layer '%s', feature " CPL_FRMT_GIB
+                     ": coordinate (%g, %g) is too far from the origin for "
+                     "PIXEL_SIZE.",
+                     fc->role, OGR_L_GetName(fc->layer), fc->fid, x, y);
+            return FALSE;
+        }
+        const int64_t X = (int64_t)llround(qx), Y = (int64_t)llround(qy);
+        if (b->npts && b->px[b->npts - 1] == X && b->py[b->npts - 1] == Y)
+            continue;
+        b->px[b->npts] = X;
+        b->py[b->npts] = Y;
+        b->npts++;
+    }
+    return TRUE;
+}
+
+/* Parses a width value: a number, optionally followed by "m" or "ft". */
+static int parse_width(const char *s, double *w)
+{
+    char *end = NULL;
+    while (*s && isspace((unsigned char)*s))
+        s++;
+    const double v = CPLStrtod(s, &end);
+    if (end == s || !isfinite(v))
+        return FALSE;
+    while (*end && isspace((unsigned char)*end))
+        end++;
+    double f = 1.0;
+    if (EQUAL(end, "ft") || EQUAL(end, "feet") || EQUAL(end, "'"))
+        f = 0.3048;
+    else if (*end && !EQUAL(end, "m") && !EQUAL(end, "meters") &&
+             !EQUAL(end, "metres"))
+        return FALSE;
+    *w = v * f;
+    return *w > 0;
+}
+
+static OGRGeometryH linear(OGRGeometryH g)
+{
+    if (OGR_G_HasCurveGeometry(g, TRUE))
+        return OGR_G_GetLinearGeometry(g, 0, NULL);
+    return OGR_G_Clone(g);
+}
+
+static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
+                       double unit, OGRSpatialReferenceH dst,
+                       size_t *nvert, const char *path)
+{
+    (void)path;
+    feat_ctx fc = {"RIVERS", h, 0, unit, NULL};
+    OGRSpatialReferenceH src = layer_srs(h);
+    int ok = TRUE, wfield = -1;
+    size_t zero = 0, badw = 0;
+    const OGRwkbGeometryType lt = wkbFlatten(OGR_L_GetGeomType(h));
+    if (lt == wkbPoint || lt == wkbMultiPoint || lt == wkbPolygon ||
+        lt == wkbMultiPolygon || lt == wkbCurvePolygon ||
+        lt == wkbMultiSurface)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: RIVERS layer '%s' has %s geometries; rivers "
+                 "must be lines (give water areas as LAKES).",
+                 OGR_L_GetName(h), OGRGeometryTypeToName(lt));
+        return FALSE;
+    }
+    if (p->width_field)
+    {
+        wfield = OGR_FD_GetFieldIndex(OGR_L_GetLayerDefn(h), p->width_field);
+        if (wfield < 0)
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: RIVERS layer '%s' has no field '%s' "
+                     "(WIDTH_FIELD).",
+                     OGR_L_GetName(h), p->width_field);
+            return FALSE;
+        }
+    }
+    if (src && dst)
+    {
+        OGRSpatialReferenceH s = clone_trad(src);
+        if (!OSRIsSame(s, dst))
+            fc.ct = OCTNewCoordinateTransformation(s, dst);
+        OSRRelease(s);
+        if (!OSRIsSame(src, dst) && !fc.ct)
+            return FALSE;
+    }
+    OGR_L_ResetReading(h);
+    OGRFeatureH f;
+    while (ok && (f = OGR_L_GetNextFeature(h)) != NULL)
+    {
+        fc.fid = OGR_F_GetFID(f);
+        OGRGeometryH g0 = OGR_F_GetGeometryRef(f);
+        if (!g0 || OGR_G_IsEmpty(g0))
+        {
+            OGR_F_Destroy(f);
+            continue;
+        }
+        double w = p->width;
+        if (wfield >= 0)
+        {
+            double v;
+            const OGRFieldType ft =
+                OGR_Fld_GetType(OGR_FD_GetFieldDefn(OGR_L_GetLayerDefn(h),
+                                                    wfield));
+            int good = FALSE;
+            if (OGR_F_IsFieldSetAndNotNull(f, wfield))
+            {
+                if (ft == OFTReal || ft == OFTInteger || ft == OFTInteger64)
+                {
+                    v = OGR_F_GetFieldAsDouble(f, wfield);
+                    good = isfinite(v) && v > 0;
+                }
+                else
+                    good = parse_width(OGR_F_GetFieldAsString(f, wfield), &v);
+            }
+            if (good)
+                w = v;
+            else
+                badw++;
+        }
+        OGRGeometryH g = linear(g0);
+        const OGRwkbGeometryType t = wkbFlatten(OGR_G_GetGeometryType(g));
+        int nparts = 1;
+        if (t == wkbMultiLineString || t == wkbGeometryCollection)
+            nparts = OGR_G_GetGeometryCount(g);
+        else if (t != wkbLineString)
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: RIVERS layer '%s', feature " CPL_FRMT_GIB
+                     ": %s geometry; rivers must be lines.",
+                     OGR_L_GetName(h), fc.fid, OGRGeometryTypeToName(t));
+            ok = FALSE;
+        }
+        size_t before = b->nsegs;
+        for (int k = 0; ok && k < nparts; k++)
+        {
+            OGRGeometryH part = t == wkbLineString ? g : OGR_G_GetGeometryRef(g, k);
+            if (wkbFlatten(OGR_G_GetGeometryType(part)) != wkbLineString)
+            {
+                CPLError(CE_Failure, CPLE_AppDefined,
+                         "WATERMESH: RIVERS layer '%s', feature " CPL_FRMT_GIB
+                         ": a %s member; rivers must be lines.",
+                         OGR_L_GetName(h), fc.fid,
+                         OGRGeometryTypeToName(OGR_G_GetGeometryType(part)));
+                ok = FALSE;
+                break;
+            }
+            *nvert += (size_t)OGR_G_GetPointCount(part);
+            if (!read_points(b, part, &fc))
+            {
+                ok = FALSE;
+                break;
+            }
+            if (!reserve((void **)&b->segs, &b->segs_cap,
+                         b->nsegs + b->npts, sizeof *b->segs))
+            {
+                ok = FALSE;
+                break;
+            }
+            for (size_t i = 0; i + 1 < b->npts; i++)
+            {
+                wm_river_seg *s = &b->segs[b->nsegs++];
+                s->ax = b->px[i];
+                s->ay = b->py[i];
+                s->bx = b->px[i + 1];
+                s->by = b->py[i + 1];
+                s->r = w / 2.0 / unit;
+            }
+        }
+        if (ok && b->nsegs == before)
+            zero++;
+        OGR_G_DestroyGeometry(g);
+        OGR_F_Destroy(f);
+    }
+    if (fc.ct)
+        OCTDestroyCoordinateTransformation(fc.ct);
+    if (ok && zero)
+        CPLError(CE_Warning, CPLE_AppDefined,
+                 "WATERMESH: RIVERS layer '%s': %lu river(s) of zero length "
+                 "skipped.",
+                 OGR_L_GetName(h), (unsigned long)zero);
+    if (ok && badw)
+        CPLError(CE_Warning, CPLE_AppDefined,
+                 "WATERMESH: RIVERS layer '%s': %lu feature(s) with a NULL, "
+                 "empty, unparsable or non-positive '%s' use WIDTH=%g.",
+                 OGR_L_GetName(h), (unsigned long)badw, p->width_field,
+                 p->width);
+    return ok;
+}
+
+static int add_ring(builder *b)
+{
+    if (b->npts > 1 && b->px[0] == b->px[b->npts - 1] &&
+        b->py[0] == b->py[b->npts - 1])
+        b->npts--; /* closing point */
+    if (b->npts < 3)
+        return TRUE; /* degenerate ring: no area */
+    if (!reserve((void **)&b->edges, &b->edges_cap, b->nedges + b->npts,
+                 sizeof *b->edges))
+        return FALSE;
+    for (size_t i = 0; i < b->npts; i++)
+    {
+        const size_t j = (i + 1) % b->npts;
+        wm_lake_edge *e = &b->edges[b->nedges++];
+        e->ax = b->px[i];
+        e->ay = b->py[i];
+        e->bx = b->px[j];
+        e->by = b->py[j];
+    }
+    return TRUE;
+}
+
+static int read_polygon(builder *b, OGRGeometryH poly, const feat_ctx *fc)
+{
+    const size_t before = b->nedges;
+    const int nr = OGR_G_GetGeometryCount(poly);
+    for (int i = 0; i < nr; i++)
+        if (!read_points(b, OGR_G_GetGeometryRef(poly, i), fc) || !add_ring(b))
+            return FALSE;
+    if (b->nedges == before)
+        return TRUE;
+    if (!reserve((void **)&b->poly_start, &b->poly_cap, b->npolys + 2,
+                 sizeof *b->poly_start))
+        return FALSE;
+    if (b->npolys == 0)
+        b->poly_start[0] = before;
+    b->poly_start[++b->npolys] = b->nedges;
+    return TRUE;
+}
+
+static int read_lakes(builder *b, OGRLayerH h, double unit,
+                      OGRSpatialReferenceH dst, size_t *nvert)
+{
+    feat_ctx fc = {"LAKES", h, 0, unit, NULL};
+    OGRSpatialReferenceH src = layer_srs(h);
+    int ok = TRUE;
+    const OGRwkbGeometryType lt = wkbFlatten(OGR_L_GetGeomType(h));
+    if (lt == wkbPoint || lt == wkbMultiPoint || lt == wkbLineString ||
+        lt == wkbMultiLineString || lt == wkbCircularString ||
+        lt == wkbCompoundCurve || lt == wkbMultiCurve)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: LAKES layer '%s' has %s geometries; lakes must "
+                 "be polygons (give centerlines as RIVERS).",
+                 OGR_L_GetName(h), OGRGeometryTypeToName(lt));
+        return FALSE;
+    }
+    if (src && dst)
+    {
+        OGRSpatialReferenceH s = clone_trad(src);
+        if (!OSRIsSame(s, dst))
+            fc.ct = OCTNewCoordinateTransformation(s, dst);
+        OSRRelease(s);
+        if (!OSRIsSame(src, dst) && !fc.ct)
+            return FALSE;
+    }
+    OGR_L_ResetReading(h);
+    OGRFeatureH f;
+    while (ok && (f = OGR_L_GetNextFeature(h)) != NULL)
+    {
+        fc.fid = OGR_F_GetFID(f);
+        OGRGeometryH g0 = OGR_F_GetGeometryRef(f);
+        if (!g0 || OGR_G_IsEmpty(g0))
+        {
+            OGR_F_Destroy(f);
+            continue;
+        }
+        OGRGeometryH g = linear(g0);
+        const OGRwkbGeometryType t = wkbFlatten(OGR_G_GetGeometryType(g));
+        if (t == wkbPolygon)
+        {
+            for (int i = 0; i < OGR_G_GetGeometryCount(g); i++)
+                *nvert += (size_t)OGR_G_GetPointCount(OGR_G_GetGeometryRef(g, i));
+            ok = read_polygon(b, g, &fc);
+        }
+        else if (t == wkbMultiPolygon || t == wkbGeometryCollection)
+        {
+            for (int k = 0; ok && k < OGR_G_GetGeometryCount(g); k++)
+            {
+                OGRGeometryH part = OGR_G_GetGeometryRef(g, k);
+                if (wkbFlatten(OGR_G_GetGeometryType(part)) != wkbPolygon)
+                {
+                    CPLError(CE_Failure, CPLE_AppDefined,
+                             "WATERMESH: LAKES layer '%s', feature " CPL_FRMT_GIB
+                             ": a %s member; lakes must be polygons.",
+                             OGR_L_GetName(h), fc.fid,
+                             OGRGeometryTypeToName(OGR_G_GetGeometryType(part)));
+                    ok = FALSE;
+                    break;
+                }
+                for (int i = 0; i < OGR_G_GetGeometryCount(part); i++)
+                    *nvert += (size_t)OGR_G_GetPointCount(
+                        OGR_G_GetGeometryRef(part, i));
+                ok = read_polygon(b, part, &fc);
+            }
+        }
+        else
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: LAKES layer '%s', feature " CPL_FRMT_GIB
+                     ": %s geometry; lakes must be polygons.",
+                     OGR_L_GetName(h), fc.fid, OGRGeometryTypeToName(t));
+            ok = FALSE;
+        }
+        OGR_G_DestroyGeometry(g);
+        OGR_F_Destroy(f);
+    }
+    if (fc.ct)
+        OCTDestroyCoordinateTransformation(fc.ct);
+    return ok;
+}
+
+WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes,
+                      CSLConstList opts)
+{
+    builder b;
+    memset(&b, 0, sizeof b);
+    WMScene *s = CPLCalloc(1, sizeof *s);
+    if (!hRivers && !hLakes)
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: neither RIVERS nor LAKES is set: nothing to "
+                 "mesh.");
+        goto fail;
+    }
+    if (!WMParamsParse(opts, &s->params))
+        goto fail;
+    s->hSRS = WMGetWorkingSRS(hRivers, hLakes, opts);
+    if (!s->hSRS)
+        goto fail;
+    s->unit = s->params.pixel / WM_Q;
+    if (hRivers && !read_rivers(&b, hRivers, &s->params, s->unit, s->hSRS,
+                                &s->core.river_vertices, NULL))
+        goto fail;
+    if (hLakes &&
+        !read_lakes(&b, hLakes, s->unit, s->hSRS, &s->core.lake_vertices))
+        goto fail;
+    s->core.segs = b.segs;
+    s->core.nsegs = b.nsegs;
+    s->core.edges = b.edges;
+    s->core.nedges = b.nedges;
+    s->core.npolys = b.npolys;
+    s->core.poly_start = b.poly_start;
+    if (!s->core.poly_start)
+        s->core.poly_start = CPLCalloc(1, sizeof(size_t));
+    b.segs = NULL;
+    b.edges = NULL;
+    b.poly_start = NULL;
+    s->core.n = s->params.n;
+    s->core.band = 2;
+    {
+        wm_ctx ctx = {NULL, NULL};
+        if (wm_scene_index(&s->core, &ctx) != WM_OK)
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: the scene is too large for BLOCK_SIZE=%g "
+                     "(or out of memory indexing it).",
+                     s->params.block);
+            goto fail;
+        }
+    }
+    VSIFree(b.px);
+    VSIFree(b.py);
+    return s;
+fail:
+    VSIFree(b.segs);
+    VSIFree(b.edges);
+    VSIFree(b.poly_start);
+    VSIFree(b.px);
+    VSIFree(b.py);
+    WMSceneFree(s);
+    return NULL;
+}
+
+void WMSceneFree(WMScene *s)
+{
+    if (!s)
+        return;
+    wm_scene_free(&s->core);
+    if (s->hSRS)
+        OSRRelease(s->hSRS);
+    WMParamsFree(&s->params);
+    CPLFree(s);
+}
+
+int WMSceneBlocks(const WMScene *s, const double *spat, int64_t **blocks,
+                  size_t *nblocks)
+{
+    const wm_scene *c = &s->core;
+    int64_t x0 = c->bx0, y0 = c->by0, x1 = c->bx0 + c->nbx - 1,
+            y1 = c->by0 + c->nby - 1;
+    if (spat)
+    {
+        const double bs = s->params.block;
+        const int64_t fx0 = (int64_t)floor(spat[0] / bs),
+                      fy0 = (int64_t)floor(spat[1] / bs);
+        const int64_t fx1 = (int64_t)floor(spat[2] / bs),
+                      fy1 = (int64_t)floor(spat[3] / bs);
+        if (fx0 > x0) x0 = fx0;
+        if (fy0 > y0) y0 = fy0;
+        if (fx1 < x1) x1 = fx1;
+        if (fy1 < y1) y1 = fy1;
+    }
+    *blocks = NULL;
+    *nblocks = 0;
+    if (x0 > x1 || y0 > y1)
+        return TRUE;
+    size_t n = 0;
+    int64_t *out = VSIMalloc2((size_t)((x1 - x0 + 1) * (y1 - y0 + 1)),
+                              2 * sizeof(int64_t));
+    if (!out)
+    {
+        CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
+        return FALSE;
+    }
+    for (int64_t by = y0; by <= y1; by++)
+        for (int64_t bx = x0; bx <= x1; bx++)
+        {
+            const size_t k = (size_t)((by - c->by0) * c->nbx + (bx - c->bx0));
+            if (c->blk_seg_start[k + 1] == c->blk_seg_start[k] &&
+                c->blk_poly_start[k + 1] == c->blk_poly_start[k])
+                continue;
+            out[2 * n] = bx;
+            out[2 * n + 1] = by;
+            n++;
+        }
+    *blocks = out;
+    *nblocks = n;
+    return TRUE;
+}

@@ -1,0 +1,332 @@
+/*
+ * wm_options.c - options, input datasources and .watermesh descriptors.
+ * One parser for every way in (driver open options, descriptor elements,
+ * CLI flags, C API options), so a name means the same thing everywhere.
+ */
+#include "wm_private.h"
+
+#include <cpl_conv.h>
+#include <cpl_minixml.h>
+#include <cpl_multiproc.h>
+#include <cpl_string.h>
+#include <cpl_vsi.h>
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+const char *const WM_OPTION_NAMES[] = {
+    "RIVERS",     "RIVERS_LAYER", "RIVERS_WHERE", "LAKES",      "LAKES_LAYER",
+    "LAKES_WHERE", "WIDTH",       "WIDTH_FIELD",  "PIXEL_SIZE", "BLOCK_SIZE",
+    "SIMPLIFY",   "METHOD",       "DEVICE",       "NUM_THREADS", "TARGET_SRS",
+    NULL};
+
+/* Parses a strictly numeric option value; CPLError on failure. */
+static int number(CSLConstList opts, const char *name, double def, double *out)
+{
+    const char *v = CSLFetchNameValue(opts, name);
+    if (!v || !*v)
+    {
+        *out = def;
+        return TRUE;
+    }
+    char *end = NULL;
+    const double d = CPLStrtod(v, &end);
+    while (end && (*end == ' ' || *end == '\t'))
+        end++;
+    if (end == v || (end && *end) || !isfinite(d))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: %s=%s is not a number.", name, v);
+        return FALSE;
+    }
+    *out = d;
+    return TRUE;
+}
+
+int WMParamsParse(CSLConstList opts, WMParams *p)
+{
+    memset(p, 0, sizeof *p);
+    if (!number(opts, "WIDTH", 10.0, &p->width) ||
+        !number(opts, "PIXEL_SIZE", 0.5, &p->pixel) ||
+        !number(opts, "BLOCK_SIZE", 4096.0, &p->block))
+        return FALSE;
+    if (!(p->width > 0))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: WIDTH=%g must be positive.", p->width);
+        return FALSE;
+    }
+    if (!(p->pixel > 0))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: PIXEL_SIZE=%g must be positive.", p->pixel);
+        return FALSE;
+    }
+    if (!(p->block > 0))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: BLOCK_SIZE=%g must be positive.", p->block);
+        return FALSE;
+    }
+    const double ratio = p->block / p->pixel;
+    if (fabs(ratio - floor(ratio + 0.5)) > 1e-9 * ratio || ratio < 1)
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: BLOCK_SIZE=%g is not a multiple of "
+                 "PIXEL_SIZE=%g.",
+                 p->block, p->pixel);
+        return FALSE;
+    }
+    if (ratio > (double)(WM_LOCAL_MAX / WM_Q))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: BLOCK_SIZE=%g / PIXEL_SIZE=%g = %.0f samples "
+                 "per block side: a block would not fit in memory (at most "
+                 "%d).",
+                 p->block, p->pixel, ratio, WM_LOCAL_MAX / WM_Q);
+        return FALSE;
+    }
+    if (ratio < 2)
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: BLOCK_SIZE=%g must be at least twice "
+                 "PIXEL_SIZE=%g.",
+                 p->block, p->pixel);
+        return FALSE;
+    }
+    p->n = (int32_t)floor(ratio + 0.5);
+    if (!number(opts, "SIMPLIFY", p->pixel, &p->simplify))
+        return FALSE;
+    if (p->simplify < 0)
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: SIMPLIFY=%g must be >= 0.", p->simplify);
+        return FALSE;
+    }
+    const char *m = CSLFetchNameValueDef(opts, "METHOD", "CONTOUR");
+    if (!EQUAL(m, "CONTOUR"))
+    {
+        CPLError(CE_Failure, CPLE_NotSupported,
+                 "WATERMESH: METHOD=%s is not supported (CONTOUR only in "
+                 "this version).",
+                 m);
+        return FALSE;
+    }
+    const char *d = CSLFetchNameValueDef(opts, "DEVICE", "AUTO");
+    if (EQUAL(d, "OPENCL"))
+    {
+        CPLError(CE_Failure, CPLE_NotSupported,
+                 "WATERMESH: DEVICE=OPENCL: this build has no OpenCL field "
+                 "path; use DEVICE=AUTO or CPU.");
+        return FALSE;
+    }
+    if (!EQUAL(d, "AUTO") && !EQUAL(d, "CPU"))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: DEVICE=%s: expected AUTO, CPU or OPENCL.", d);
+        return FALSE;
+    }
+    const char *t = CSLFetchNameValueDef(opts, "NUM_THREADS", "ALL_CPUS");
+    if (EQUAL(t, "ALL_CPUS"))
+        p->num_threads = CPLGetNumCPUs();
+    else
+    {
+        char *end = NULL;
+        long v = strtol(t, &end, 10);
+        if (end == t || *end || v < 1 || v > 1024)
+        {
+            CPLError(CE_Failure, CPLE_IllegalArg,
+                     "WATERMESH: NUM_THREADS=%s: expected a positive "
+                     "integer or ALL_CPUS.",
+                     t);
+            return FALSE;
+        }
+        p->num_threads = (int)v;
+    }
+    if (p->num_threads < 1)
+        p->num_threads = 1;
+    const char *wf = CSLFetchNameValue(opts, "WIDTH_FIELD");
+    if (wf && *wf)
+        p->width_field = CPLStrdup(wf);
+    const char *ts = CSLFetchNameValue(opts, "TARGET_SRS");
+    if (ts && *ts)
+        p->target_srs = CPLStrdup(ts);
+    const char *spat = CSLFetchNameValue(opts, "SPAT");
+    if (spat && *spat)
+    {
+        char **tok = CSLTokenizeString2(spat, ", ", 0);
+        int ok = CSLCount(tok) == 4;
+        for (int i = 0; ok && i < 4; i++)
+        {
+            char *end = NULL;
+            p->spat[i] = CPLStrtod(tok[i], &end);
+            ok = end != tok[i] && !*end && isfinite(p->spat[i]);
+        }
+        CSLDestroy(tok);
+        if (!ok || p->spat[0] > p->spat[2] || p->spat[1] > p->spat[3])
+        {
+            CPLError(CE_Failure, CPLE_IllegalArg,
+                     "WATERMESH: SPAT=%s: expected xmin,ymin,xmax,ymax.",
+                     spat);
+            return FALSE;
+        }
+        p->have_spat = TRUE;
+    }
+    p->stats = CPLTestBool(CSLFetchNameValueDef(opts, "STATS", "NO"));
+    return TRUE;
+}
+
+void WMParamsFree(WMParams *p)
+{
+    CPLFree(p->width_field);
+    CPLFree(p->target_srs);
+    p->width_field = p->target_srs = NULL;
+}
+
+/* Opens one role's datasource and layer, sets its attribute filter. */
+static int open_role(CSLConstList opts, const char *role, GDALDatasetH *phDS,
+                     OGRLayerH *phLayer)
+{
+    char key[32];
+    const char *path = CSLFetchNameValue(opts, role);
+    *phDS = NULL;
+    *phLayer = NULL;
+    if (!path || !*path)
+        return TRUE;
+    *phDS = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_VERBOSE_ERROR, NULL,
+                       NULL, NULL);
+    if (!*phDS)
+    {
+        CPLError(CE_Failure, CPLE_OpenFailed,
+                 "WATERMESH: cannot open %s datasource '%s'.", role, path);
+        return FALSE;
+    }
+    snprintf(key, sizeof key, "%s_LAYER", role);
+    const char *lname = CSLFetchNameValue(opts, key);
+    if (lname && *lname)
+        *phLayer = GDALDatasetGetLayerByName(*phDS, lname);
+    else if (GDALDatasetGetLayerCount(*phDS) > 0)
+        *phLayer = GDALDatasetGetLayer(*phDS, 0);
+    if (!*phLayer)
+    {
+        if (lname && *lname)
+            CPLError(CE_Failure, CPLE_OpenFailed,
+                     "WATERMESH: %s datasource '%s' has no layer '%s'.", role,
+                     path, lname);
+        else
+            CPLError(CE_Failure, CPLE_OpenFailed,
+                     "WATERMESH: %s datasource '%s' has no layer.", role,
+                     path);
+        GDALClose(*phDS);
+        *phDS = NULL;
+        return FALSE;
+    }
+    snprintf(key, sizeof key, "%s_WHERE", role);
+    const char *where = CSLFetchNameValue(opts, key);
+    if (where && *where &&
+        OGR_L_SetAttributeFilter(*phLayer, where) != OGRERR_NONE)
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: %s=%s is not a valid filter on layer '%s' of "
+                 "'%s'.",
+                 key, where, OGR_L_GetName(*phLayer), path);
+        GDALClose(*phDS);
+        *phDS = NULL;
+        *phLayer = NULL;
+        return FALSE;
+    }
+    return TRUE;
+}
+
+int WMSourcesOpen(CSLConstList opts, WMSources *src)
+{
+    memset(src, 0, sizeof *src);
+    const char *r = CSLFetchNameValue(opts, "RIVERS");
+    const char *l = CSLFetchNameValue(opts, "LAKES");
+    if ((!r || !*r) && (!l || !*l))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: neither RIVERS nor LAKES is set: nothing to "
+                 "mesh.");
+        return FALSE;
+    }
+    if (!open_role(opts, "RIVERS", &src->hRiversDS, &src->hRivers) ||
+        !open_role(opts, "LAKES", &src->hLakesDS, &src->hLakes))
+    {
+        WMSourcesClose(src);
+        return FALSE;
+    }
+    return TRUE;
+}
+
+void WMSourcesClose(WMSources *src)
+{
+    if (src->hRiversDS)
+        GDALClose(src->hRiversDS);
+    if (src->hLakesDS)
+        GDALClose(src->hLakesDS);
+    memset(src, 0, sizeof *src);
+}
+
+char **WMReadDescriptor(const char *pszPath)
+{
+    CPLXMLNode *root = NULL;
+    char **opts = NULL;
+    if (STARTS_WITH_CI(pszPath, "<WaterMesh"))
+        root = CPLParseXMLString(pszPath);
+    else
+        root = CPLParseXMLFile(pszPath);
+    if (!root)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: '%s' is not a valid watermesh descriptor "
+                 "(malformed XML).",
+                 pszPath);
+        return NULL;
+    }
+    CPLXMLNode *wm = CPLGetXMLNode(root, "=WaterMesh");
+    if (!wm)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: '%s' has no <WaterMesh> root element.", pszPath);
+        CPLDestroyXMLNode(root);
+        return NULL;
+    }
+    char *dir = CPLStrdup(CPLGetPath(pszPath));
+    for (CPLXMLNode *n = wm->psChild; n; n = n->psNext)
+    {
+        if (n->eType != CXT_Element)
+            continue;
+        int known = FALSE;
+        for (int i = 0; WM_OPTION_NAMES[i]; i++)
+            known |= EQUAL(n->pszValue, WM_OPTION_NAMES[i]);
+        if (!known)
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: '%s': unknown element <%s>.", pszPath,
+                     n->pszValue);
+            CSLDestroy(opts);
+            opts = NULL;
+            break;
+        }
+        const char *v = CPLGetXMLValue(n, NULL, "");
+        if ((EQUAL(n->pszValue, "RIVERS") || EQUAL(n->pszValue, "LAKES")) &&
+            *v && CPLIsFilenameRelative(v) && *dir &&
+            !STARTS_WITH(pszPath, "<"))
+            opts = CSLSetNameValue(opts, n->pszValue,
+                                   CPLFormFilename(dir, v, NULL));
+        else
+            opts = CSLSetNameValue(opts, n->pszValue, v);
+    }
+    CPLFree(dir);
+    CPLDestroyXMLNode(root);
+    if (!opts)
+    {
+        if (CPLGetLastErrorType() != CE_Failure)
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: '%s' sets no option.", pszPath);
+        return NULL;
+    }
+    return opts;
+}

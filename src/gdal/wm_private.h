@@ -1,0 +1,112 @@
+/*
+ * wm_private.h - the GDAL side's internal interface: options, sources,
+ * scene ingestion, the parallel block runner and feature emission. Shared
+ * by the C API, the driver and the CLI so each thing is done in one place.
+ */
+#ifndef WM_PRIVATE_H
+#define WM_PRIVATE_H
+
+#include "watermesh.h"
+
+#include "../core/block.h"
+#include "../core/scene.h"
+
+CPL_C_START
+
+/** Every option name, in documentation order (NULL-terminated). */
+extern const char *const WM_OPTION_NAMES[];
+
+/** Parsed, validated parameters. */
+typedef struct
+{
+    double width;      /* default river width, m */
+    char *width_field; /* or NULL */
+    double pixel;      /* PIXEL_SIZE, m */
+    double block;      /* BLOCK_SIZE, m */
+    int32_t n;         /* block / pixel */
+    double simplify;   /* m */
+    int num_threads;
+    char *target_srs; /* or NULL */
+    int have_spat;
+    double spat[4]; /* xmin, ymin, xmax, ymax in the working CRS */
+    int stats;
+} WMParams;
+
+/** Parses and validates options; CPLError and FALSE on a bad value. */
+int WMParamsParse(CSLConstList papszOptions, WMParams *p);
+void WMParamsFree(WMParams *p);
+
+/** The inputs of a run: datasets opened from RIVERS / LAKES options. */
+typedef struct
+{
+    GDALDatasetH hRiversDS, hLakesDS;
+    OGRLayerH hRivers, hLakes;
+} WMSources;
+
+/** Opens RIVERS/RIVERS_LAYER/RIVERS_WHERE and the LAKES ones; CPLError
+ *  naming the input and FALSE on failure (nothing left open). */
+int WMSourcesOpen(CSLConstList papszOptions, WMSources *src);
+void WMSourcesClose(WMSources *src);
+
+/**
+ * Reads a .watermesh descriptor (XML, root <WaterMesh>, one element per
+ * option) into a NAME=VALUE list, datasource paths made absolute against
+ * the descriptor's folder. Returns NULL with a CPLError on failure; caller
+ * frees with CSLDestroy().
+ */
+char **WMReadDescriptor(const char *pszPath);
+
+/** A scene ready to run: the core scene plus what the GDAL side needs. */
+typedef struct
+{
+    wm_scene core;
+    double unit; /* metres per lattice unit: pixel / WM_Q */
+    OGRSpatialReferenceH hSRS;
+    WMParams params;
+} WMScene;
+
+/** Reads both layers into a scene (reprojecting, quantizing, indexing).
+ *  Returns NULL with a CPLError. Caller frees with WMSceneFree(). */
+WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes,
+                      CSLConstList papszOptions);
+void WMSceneFree(WMScene *s);
+
+/** Blocks of the scene touching the spatial filter (if any), in row-major
+ *  order; skips blocks with nothing in reach. Caller frees *blocks. */
+int WMSceneBlocks(const WMScene *s, const double *spat, int64_t **blocks,
+                  size_t *nblocks);
+
+/** Called from the calling thread, in block order; takes ownership of res.
+ *  Returns FALSE to stop the run (after a CPLError). */
+typedef int (*WMBlockSink)(void *user, wm_block_result *res);
+
+/** Run statistics of WMRunBlocks. */
+typedef struct
+{
+    double seconds[WM_STAGE_COUNT]; /* summed over blocks (thread time) */
+    double wall;
+    size_t blocks, polygons, vertices, triangles, mixed_tiles;
+    uint64_t pairs;
+} WMRunStats;
+
+/** Runs blocks on num_threads threads, at most a few per thread in flight,
+ *  handing results to sink in order. CE_Failure after a CPLError. */
+CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
+                   WMBlockSink sink, void *user, GDALProgressFunc pfn,
+                   void *pArg, WMRunStats *stats);
+
+/** Features of one polygon of a block result (world coordinates). Caller
+ *  destroys with OGR_G_DestroyGeometry. */
+OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
+                               size_t p);
+OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
+                            size_t p);
+/** Polygon area in m^2 (exact lattice area, then scaled). */
+double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p);
+
+/** Prints the per-stage table and the vertex ratio to stdout. */
+void WMPrintStats(const WMScene *s, const WMRunStats *st);
+
+CPL_C_END
+
+#endif /* WM_PRIVATE_H */

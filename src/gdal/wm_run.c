@@ -1,0 +1,350 @@
+/*
+ * wm_run.c - the parallel block runner, feature emission and the public
+ * entry point WMGenerate.
+ *
+ * Runner: worker threads take block indices in order from a shared
+ * counter, never more than `window` ahead of the consumer, and park their
+ * results in a ring of slots; the calling thread hands results to the sink
+ * strictly in block order. So output order (and bytes) do not depend on the
+ * thread count (invariant 7) and memory is bounded by the window, not by
+ * the scene.
+ */
+#include "wm_private.h"
+
+#include <cpl_conv.h>
+#include <cpl_string.h>
+
+#include <pthread.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct
+{
+    const WMScene *s;
+    const int64_t *blocks;
+    size_t nblocks, window;
+    wm_block_opts opts;
+    pthread_mutex_t mu;
+    pthread_cond_t cv;
+    size_t next;     /* next block to take */
+    size_t consumed; /* blocks handed to the sink */
+    int stop;
+    wm_block_result *slot; /* window slots */
+    int *ready;            /* per slot: 0 empty, 1 ok, -1 failed */
+    char **msg;            /* per slot: error text */
+} runner;
+
+static void collect_error(void *user, wm_status st, const char *msg)
+{
+    (void)st;
+    char **dst = user;
+    if (!*dst)
+        *dst = CPLStrdup(msg);
+}
+
+static void *worker(void *arg)
+{
+    runner *r = arg;
+    pthread_mutex_lock(&r->mu);
+    for (;;)
+    {
+        while (!r->stop && r->next < r->nblocks &&
+               r->next >= r->consumed + r->window)
+            pthread_cond_wait(&r->cv, &r->mu);
+        if (r->stop || r->next >= r->nblocks)
+            break;
+        const size_t i = r->next++;
+        pthread_mutex_unlock(&r->mu);
+
+        wm_block_result res;
+        char *msg = NULL;
+        wm_ctx ctx = {collect_error, &msg};
+        const wm_status st = wm_block_run(&r->s->core, r->blocks[2 * i],
+                                          r->blocks[2 * i + 1], &r->opts,
+                                          &res, &ctx);
+        pthread_mutex_lock(&r->mu);
+        const size_t k = i % r->window;
+        r->slot[k] = res;
+        r->msg[k] = msg;
+        r->ready[k] = st == WM_OK ? 1 : -1;
+        pthread_cond_broadcast(&r->cv);
+    }
+    pthread_mutex_unlock(&r->mu);
+    return NULL;
+}
+
+CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
+                   WMBlockSink sink, void *user, GDALProgressFunc pfn,
+                   void *pArg, WMRunStats *stats)
+{
+    CPLErr err = CE_None;
+    runner r;
+    memset(&r, 0, sizeof r);
+    memset(stats, 0, sizeof *stats);
+    const double t0 = wm_now();
+    int nthreads = s->params.num_threads;
+    if ((size_t)nthreads > nblocks)
+        nthreads = nblocks ? (int)nblocks : 1;
+    r.s = s;
+    r.blocks = blocks;
+    r.nblocks = nblocks;
+    r.window = 2 * (size_t)nthreads + 1;
+    r.opts.simplify = s->params.simplify / s->unit;
+    r.opts.triangulate = 1;
+    r.slot = CPLCalloc(r.window, sizeof *r.slot);
+    r.ready = CPLCalloc(r.window, sizeof *r.ready);
+    r.msg = CPLCalloc(r.window, sizeof *r.msg);
+    pthread_mutex_init(&r.mu, NULL);
+    pthread_cond_init(&r.cv, NULL);
+    pthread_t *th = CPLCalloc((size_t)nthreads, sizeof *th);
+    int started = 0;
+    for (; started < nthreads; started++)
+        if (pthread_create(&th[started], NULL, worker, &r) != 0)
+            break;
+    if (started == 0)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: cannot start worker threads.");
+        err = CE_Failure;
+    }
+    if (pfn && !pfn(0.0, "", pArg))
+    {
+        CPLError(CE_Failure, CPLE_UserInterrupt, "User terminated");
+        err = CE_Failure;
+    }
+    for (size_t i = 0; err == CE_None && i < nblocks; i++)
+    {
+        const size_t k = i % r.window;
+        pthread_mutex_lock(&r.mu);
+        while (!r.ready[k])
+            pthread_cond_wait(&r.cv, &r.mu);
+        wm_block_result res = r.slot[k];
+        const int ok = r.ready[k] > 0;
+        char *msg = r.msg[k];
+        r.ready[k] = 0;
+        r.msg[k] = NULL;
+        r.consumed = i + 1;
+        pthread_cond_broadcast(&r.cv);
+        pthread_mutex_unlock(&r.mu);
+        if (!ok)
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "WATERMESH: block (%lld, %lld): %s",
+                     (long long)blocks[2 * i], (long long)blocks[2 * i + 1],
+                     msg ? msg : "failed");
+            CPLFree(msg);
+            err = CE_Failure;
+            break;
+        }
+        CPLFree(msg);
+        for (int st = 0; st < WM_STAGE_COUNT; st++)
+            stats->seconds[st] += res.seconds[st];
+        stats->blocks++;
+        stats->polygons += res.npolys;
+        stats->vertices += res.rings.npts;
+        stats->triangles += res.poly_tri ? res.poly_tri[res.npolys] : 0;
+        stats->mixed_tiles += res.mixed_tiles;
+        stats->pairs += res.pairs;
+        if (!sink(user, &res))
+        {
+            err = CE_Failure;
+            break;
+        }
+        if (pfn && !pfn((double)(i + 1) / (double)nblocks, "", pArg))
+        {
+            CPLError(CE_Failure, CPLE_UserInterrupt, "User terminated");
+            err = CE_Failure;
+        }
+    }
+    pthread_mutex_lock(&r.mu);
+    r.stop = 1;
+    pthread_cond_broadcast(&r.cv);
+    pthread_mutex_unlock(&r.mu);
+    for (int t = 0; t < started; t++)
+        pthread_join(th[t], NULL);
+    for (size_t k = 0; k < r.window; k++)
+    {
+        if (r.ready[k] > 0)
+            wm_block_result_free(&r.slot[k]);
+        CPLFree(r.msg[k]);
+    }
+    CPLFree(th);
+    CPLFree(r.slot);
+    CPLFree(r.ready);
+    CPLFree(r.msg);
+    pthread_mutex_destroy(&r.mu);
+    pthread_cond_destroy(&r.cv);
+    stats->wall = wm_now() - t0;
+    return err;
+}
+
+/* World coordinates of a block-local lattice point. */
+static void world(const WMScene *s, const wm_block_result *r, wm_pt p,
+                  double *x, double *y)
+{
+    const int64_t side = (int64_t)s->core.n * WM_Q;
+    *x = (double)(r->bx * side + p.x) * s->unit;
+    *y = (double)(r->by * side + p.y) * s->unit;
+}
+
+static OGRGeometryH ring_geom(const WMScene *s, const wm_block_result *r,
+                              size_t ri)
+{
+    OGRGeometryH g = OGR_G_CreateGeometry(wkbLinearRing);
+    const size_t a = r->rings.start[ri], b = r->rings.start[ri + 1];
+    OGR_G_SetPointCount(g, (int)(b - a + 1));
+    for (size_t k = a; k <= b; k++)
+    {
+        double x, y;
+        world(s, r, r->rings.pts[k == b ? a : k], &x, &y);
+        OGR_G_SetPoint_2D(g, (int)(k - a), x, y);
+    }
+    return g;
+}
+
+OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
+                               size_t p)
+{
+    OGRGeometryH g = OGR_G_CreateGeometry(wkbPolygon);
+    for (size_t ri = r->poly_ring[p]; ri < r->poly_ring[p + 1]; ri++)
+        OGR_G_AddGeometryDirectly(g, ring_geom(s, r, ri));
+    return g;
+}
+
+OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
+                            size_t p)
+{
+    OGRGeometryH g = OGR_G_CreateGeometry(wkbMultiPolygon);
+    for (size_t t = r->poly_tri[p]; t < r->poly_tri[p + 1]; t++)
+    {
+        OGRGeometryH tri = OGR_G_CreateGeometry(wkbPolygon);
+        OGRGeometryH ring = OGR_G_CreateGeometry(wkbLinearRing);
+        for (int k = 0; k <= 3; k++)
+        {
+            double x, y;
+            world(s, r, r->rings.pts[r->tris[3 * t + (size_t)(k % 3)]], &x,
+                  &y);
+            OGR_G_AddPoint_2D(ring, x, y);
+        }
+        OGR_G_AddGeometryDirectly(tri, ring);
+        OGR_G_AddGeometryDirectly(g, tri);
+    }
+    return g;
+}
+
+double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p)
+{
+    wm_i128 a2 = 0;
+    for (size_t ri = r->poly_ring[p]; ri < r->poly_ring[p + 1]; ri++)
+        a2 += wm_ring_area2(r->rings.pts + r->rings.start[ri],
+                            wm_rings_len(&r->rings, ri));
+    return (double)a2 * 0.5 * s->unit * s->unit;
+}
+
+void WMPrintStats(const WMScene *s, const WMRunStats *st)
+{
+    static const char *names[WM_STAGE_COUNT] = {
+        "field", "extraction", "simplification", "holes", "triangulation"};
+    double sum = 0;
+    printf("%-16s %12s\n", "stage", "seconds");
+    for (int i = 0; i < WM_STAGE_COUNT; i++)
+    {
+        printf("%-16s %12.3f\n", names[i], st->seconds[i]);
+        sum += st->seconds[i];
+    }
+    printf("%-16s %12.3f\n", "total (stages)", sum);
+    printf("%-16s %12.3f\n", "total (wall)", st->wall);
+    printf("threads %d, blocks %lu, mixed tiles %lu, sample-segment pairs "
+           "%llu\n",
+           s->params.num_threads, (unsigned long)st->blocks,
+           (unsigned long)st->mixed_tiles, (unsigned long long)st->pairs);
+    const double denom =
+        2.0 * (double)s->core.river_vertices + (double)s->core.lake_vertices;
+    printf("polygons %lu, output vertices %lu, triangles %lu\n",
+           (unsigned long)st->polygons, (unsigned long)st->vertices,
+           (unsigned long)st->triangles);
+    printf("V = %.3f (output vertices / (2 * %lu river + %lu lake "
+           "vertices))\n",
+           denom > 0 ? (double)st->vertices / denom : 0.0,
+           (unsigned long)s->core.river_vertices,
+           (unsigned long)s->core.lake_vertices);
+}
+
+/* ---- WMGenerate: the sink writes features to the two layers ---------- */
+
+typedef struct
+{
+    const WMScene *s;
+    OGRLayerH water, mesh;
+} gen_sink;
+
+static void set_int(OGRFeatureH f, const char *name, GIntBig v)
+{
+    const int i = OGR_F_GetFieldIndex(f, name);
+    if (i >= 0)
+        OGR_F_SetFieldInteger64(f, i, v);
+}
+
+static int write_block(void *user, wm_block_result *res)
+{
+    gen_sink *g = user;
+    int ok = TRUE;
+    for (size_t p = 0; ok && p < res->npolys; p++)
+    {
+        if (g->water)
+        {
+            OGRFeatureH f = OGR_F_Create(OGR_L_GetLayerDefn(g->water));
+            set_int(f, "block_x", res->bx);
+            set_int(f, "block_y", res->by);
+            const int ia = OGR_F_GetFieldIndex(f, "area");
+            if (ia >= 0)
+                OGR_F_SetFieldDouble(f, ia, WMPolygonArea(g->s, res, p));
+            OGR_F_SetGeometryDirectly(f, WMPolygonGeometry(g->s, res, p));
+            ok = OGR_L_CreateFeature(g->water, f) == OGRERR_NONE;
+            OGR_F_Destroy(f);
+        }
+        if (ok && g->mesh)
+        {
+            OGRFeatureH f = OGR_F_Create(OGR_L_GetLayerDefn(g->mesh));
+            set_int(f, "block_x", res->bx);
+            set_int(f, "block_y", res->by);
+            set_int(f, "triangles",
+                    (GIntBig)(res->poly_tri[p + 1] - res->poly_tri[p]));
+            OGR_F_SetGeometryDirectly(f, WMMeshGeometry(g->s, res, p));
+            ok = OGR_L_CreateFeature(g->mesh, f) == OGRERR_NONE;
+            OGR_F_Destroy(f);
+        }
+    }
+    if (!ok)
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: writing block (%lld, %lld) failed.",
+                 (long long)res->bx, (long long)res->by);
+    wm_block_result_free(res);
+    return ok;
+}
+
+CPLErr WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes, OGRLayerH hWater,
+                  OGRLayerH hMesh, CSLConstList papszOptions,
+                  GDALProgressFunc pfnProgress, void *pProgressArg)
+{
+    WMScene *s = WMSceneBuild(hRivers, hLakes, papszOptions);
+    if (!s)
+        return CE_Failure;
+    int64_t *blocks = NULL;
+    size_t nblocks = 0;
+    CPLErr err = CE_Failure;
+    if (WMSceneBlocks(s, s->params.have_spat ? s->params.spat : NULL, &blocks,
+                      &nblocks))
+    {
+        gen_sink g = {s, hWater, hMesh};
+        WMRunStats st;
+        err = WMRunBlocks(s, blocks, nblocks, write_block, &g, pfnProgress,
+                          pProgressArg, &st);
+        if (err == CE_None && s->params.stats)
+            WMPrintStats(s, &st);
+    }
+    VSIFree(blocks);
+    WMSceneFree(s);
+    return err;
+}

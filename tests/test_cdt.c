@@ -1,0 +1,475 @@
+/*
+ * test_cdt.c - wm_cdt_triangulate on small exact cases, on large random
+ * polygons and on cocircular lattices; every result is checked for the
+ * triangle count, orientation, ring edges, edge manifoldness, exact local
+ * Delaunay property and exact area. Invalid inputs must fail cleanly.
+ */
+#include "cdt.h"
+#include "lattice.h"
+#include "tap.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+#include <time.h>
+
+static uint64_t lcg_state = 20240601;
+
+static uint32_t lcg(void)
+{
+    lcg_state = lcg_state * 6364136223846793005ULL + 1442695040888963407ULL;
+    return (uint32_t)(lcg_state >> 33);
+}
+
+/* uniform in [0, 1) */
+static double unif(void)
+{
+    return (double)lcg() / 4294967296.0;
+}
+
+static void push(wm_rings *r, int x, int y)
+{
+    wm_pt p;
+    p.x = x;
+    p.y = y;
+    if (wm_rings_push(r, p) != WM_OK)
+        abort();
+}
+
+static void close_ring(wm_rings *r)
+{
+    if (wm_rings_close(r) != WM_OK)
+        abort();
+}
+
+/* Axis-aligned rectangle with `extra` collinear points per side, ccw or
+ * clockwise. */
+static void rect(wm_rings *r, int x0, int y0, int x1, int y1, int ccw,
+                 int extra)
+{
+    const int cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
+    for (int s = 0; s < 4; s++)
+    {
+        const int c = ccw ? s : (4 - s) % 4, d = ccw ? (c + 1) % 4 : (c + 3) % 4;
+        for (int k = 0; k <= extra; k++)
+        {
+            const long long t = k, m = extra + 1;
+            push(r, (int)(cx[c] + (cx[d] - cx[c]) * t / m),
+                 (int)(cy[c] + (cy[d] - cy[c]) * t / m));
+        }
+    }
+    close_ring(r);
+}
+
+/* ---- checking ------------------------------------------------------- */
+
+typedef struct
+{
+    uint32_t lo, hi, from, opp;
+} hedge;
+
+typedef struct
+{
+    uint32_t lo, hi, from;
+} redge;
+
+static int cmp_hedge(const void *a, const void *b)
+{
+    const hedge *x = a, *y = b;
+    if (x->lo != y->lo)
+        return x->lo < y->lo ? -1 : 1;
+    if (x->hi != y->hi)
+        return x->hi < y->hi ? -1 : 1;
+    return (x->from > y->from) - (x->from < y->from);
+}
+
+static int cmp_redge(const void *a, const void *b)
+{
+    const redge *x = a, *y = b;
+    if (x->lo != y->lo)
+        return x->lo < y->lo ? -1 : 1;
+    return (x->hi > y->hi) - (x->hi < y->hi);
+}
+
+static const redge *find_redge(const redge *re, size_t n, uint32_t lo,
+                               uint32_t hi)
+{
+    size_t a = 0, b = n;
+    while (a < b)
+    {
+        const size_t mid = a + (b - a) / 2;
+        if (re[mid].lo < lo || (re[mid].lo == lo && re[mid].hi < hi))
+            a = mid + 1;
+        else
+            b = mid;
+    }
+    return (a < n && re[a].lo == lo && re[a].hi == hi) ? &re[a] : NULL;
+}
+
+static int nerrors;
+
+static void on_error(void *user, wm_status status, const char *msg)
+{
+    (void)user;
+    printf("#   reported (status %d): %s\n", (int)status, msg);
+    nerrors++;
+}
+
+static double now_s(void)
+{
+    struct timespec ts;
+    timespec_get(&ts, TIME_UTC);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Triangulates r and checks everything; returns the seconds spent in
+ * wm_cdt_triangulate. */
+static double check(const char *name, const wm_rings *r)
+{
+    const wm_ctx ctx = {on_error, NULL};
+    uint32_t *tris = NULL;
+    size_t nt = 0;
+    const size_t n = r->npts;
+    const double t0 = now_s();
+    const wm_status st =
+        wm_cdt_triangulate(r->pts, r->start, r->nrings, &tris, &nt, &ctx);
+    const double dt = now_s() - t0;
+    TAP_EQ(st, WM_OK, "%s: status (%zu vertices, %zu holes)", name, n,
+           r->nrings - 1);
+    if (st != WM_OK)
+    {
+        free(tris);
+        return dt;
+    }
+    TAP_EQ(nt, n + 2 * (r->nrings - 1) - 2, "%s: triangle count", name);
+
+    /* orientation, indices, area */
+    size_t bad_ccw = 0;
+    wm_i128 area = 0, ring_area = 0;
+    for (size_t t = 0; t < nt; t++)
+    {
+        const uint32_t *v = tris + 3 * t;
+        if (v[0] >= n || v[1] >= n || v[2] >= n)
+        {
+            bad_ccw++;
+            continue;
+        }
+        if (wm_orient(r->pts[v[0]], r->pts[v[1]], r->pts[v[2]]) <= 0)
+            bad_ccw++;
+        area += wm_orient_det(r->pts[v[0]], r->pts[v[1]], r->pts[v[2]]);
+    }
+    for (size_t i = 0; i < r->nrings; i++)
+        ring_area += wm_ring_area2(r->pts + r->start[i], wm_rings_len(r, i));
+    TAP_EQ(bad_ccw, 0, "%s: every triangle counter-clockwise", name);
+    TAP_OK(area == ring_area, "%s: triangle area == polygon area (%.17g)",
+           name, (double)ring_area);
+
+    /* edges */
+    hedge *he = malloc(3 * nt * sizeof *he);
+    redge *re = malloc(n * sizeof *re);
+    if (!he || !re)
+        abort();
+    for (size_t t = 0; t < nt; t++)
+    {
+        for (int i = 0; i < 3; i++)
+        {
+            const uint32_t a = tris[3 * t + i], b = tris[3 * t + (i + 1) % 3];
+            hedge *h = he + 3 * t + i;
+            h->lo = a < b ? a : b;
+            h->hi = a < b ? b : a;
+            h->from = a;
+            h->opp = tris[3 * t + (i + 2) % 3];
+        }
+    }
+    for (size_t i = 0; i < r->nrings; i++)
+    {
+        const size_t s = r->start[i], len = wm_rings_len(r, i);
+        for (size_t j = 0; j < len; j++)
+        {
+            const uint32_t a = (uint32_t)(s + j);
+            const uint32_t b = (uint32_t)(s + (j + 1) % len);
+            re[s + j].lo = a < b ? a : b;
+            re[s + j].hi = a < b ? b : a;
+            re[s + j].from = a;
+        }
+    }
+    qsort(he, 3 * nt, sizeof *he, cmp_hedge);
+    qsort(re, n, sizeof *re, cmp_redge);
+    size_t ring_found = 0, bad_ring = 0, bad_shared = 0, bad_delaunay = 0;
+    size_t interior = 0;
+    for (size_t i = 0; i < 3 * nt;)
+    {
+        size_t j = i + 1;
+        while (j < 3 * nt && he[j].lo == he[i].lo && he[j].hi == he[i].hi)
+            j++;
+        const redge *ring = find_redge(re, n, he[i].lo, he[i].hi);
+        if (ring)
+        {
+            ring_found++;
+            /* exactly one triangle, on the left of the ring's direction */
+            if (j - i != 1 || he[i].from != ring->from)
+                bad_ring++;
+        }
+        else if (j - i != 2 || he[i].from == he[i + 1].from)
+            bad_shared++;
+        else
+        {
+            interior++;
+            const hedge *a = he + i, *b = he + i + 1;
+            const uint32_t to = a->from == a->lo ? a->hi : a->lo;
+            if (wm_incircle(r->pts[a->from], r->pts[to], r->pts[a->opp],
+                            r->pts[b->opp]) > 0)
+                bad_delaunay++;
+        }
+        i = j;
+    }
+    TAP_EQ(ring_found, n, "%s: every ring edge is a triangle edge", name);
+    TAP_EQ(bad_ring, 0, "%s: ring edges bound one triangle, water left",
+           name);
+    TAP_EQ(bad_shared, 0, "%s: other edges shared by two triangles", name);
+    TAP_EQ(bad_delaunay, 0, "%s: %zu interior edges locally Delaunay", name,
+           interior);
+    free(he);
+    free(re);
+    free(tris);
+    return dt;
+}
+
+/* ---- polygons ---------------------------------------------------------- */
+
+static void comb(wm_rings *r, int teeth, int width, int gap, int height,
+                 int base, int bottom_step)
+{
+    const int pitch = width + gap;
+    const int xend = pitch * (teeth - 1) + width;
+    for (int x = 0; x < xend; x += bottom_step)
+        push(r, x, 0);
+    for (int i = teeth - 1; i >= 0; i--)
+    {
+        push(r, pitch * i + width, i == teeth - 1 ? 0 : base);
+        if (i == teeth - 1)
+            push(r, pitch * i + width, base);
+        push(r, pitch * i + width, height);
+        push(r, pitch * i, height);
+        if (i > 0)
+            push(r, pitch * i, base);
+    }
+    close_ring(r);
+}
+
+/* Star-shaped polygon around the centre of the lattice: n vertices at
+ * evenly spaced angles, radii from rad(i). Simple as long as every edge
+ * turns counter-clockwise around the centre; returns that check. */
+static int polar(wm_rings *r, size_t n, double (*rad)(size_t))
+{
+    const double c = (double)(1 << 23), pi2 = 6.283185307179586;
+    const size_t s = r->npts;
+    for (size_t i = 0; i < n; i++)
+    {
+        const double a = pi2 * (double)i / (double)n, q = rad(i);
+        push(r, (int)lround(c + q * cos(a)), (int)lround(c + q * sin(a)));
+    }
+    close_ring(r);
+    wm_pt ctr;
+    ctr.x = ctr.y = 1 << 23;
+    for (size_t i = 0; i < n; i++)
+    {
+        if (wm_orient(ctr, r->pts[s + i], r->pts[s + (i + 1) % n]) <= 0)
+            return 0;
+    }
+    return 1;
+}
+
+static double spiky(size_t i)
+{
+    (void)i;
+    return 8.0e6 * (0.5 + 0.5 * unif());
+}
+
+static double walk_r = 6.0e6;
+
+static double smooth(size_t i)
+{
+    (void)i;
+    walk_r += 2000.0 * (unif() - 0.5);
+    if (walk_r < 3.0e6)
+        walk_r = 3.0e6;
+    if (walk_r > 8.0e6)
+        walk_r = 8.0e6;
+    return walk_r;
+}
+
+static void expect_invalid(const char *name, const wm_rings *r)
+{
+    const wm_ctx ctx = {on_error, NULL};
+    uint32_t *tris = (uint32_t *)&nerrors; /* must be reset to NULL */
+    size_t nt = 7;
+    const int before = nerrors;
+    const wm_status st =
+        wm_cdt_triangulate(r->pts, r->start, r->nrings, &tris, &nt, &ctx);
+    TAP_EQ(st, WM_ERR_INVALID, "%s: rejected as invalid", name);
+    TAP_OK(tris == NULL && nt == 0 && nerrors > before,
+           "%s: no output, message reported", name);
+    free(tris == (uint32_t *)&nerrors ? NULL : tris);
+}
+
+int main(void)
+{
+    wm_rings r;
+    memset(&r, 0, sizeof r);
+
+    /* a triangle */
+    push(&r, 0, 0);
+    push(&r, 10, 0);
+    push(&r, 0, 10);
+    close_ring(&r);
+    check("triangle", &r);
+
+    /* a square with 200 points per side (collinear runs on the hull) */
+    wm_rings_clear(&r);
+    rect(&r, 1000, 1000, 3000, 3000, 1, 199);
+    check("square 200/side", &r);
+
+    /* a concave comb: long thin teeth, a bottom with collinear points */
+    wm_rings_clear(&r);
+    comb(&r, 100, 2, 3, 100000, 10, 7);
+    check("comb", &r);
+
+    /* one hole, with collinear points on both rings */
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 1000, 1000, 1, 9);
+    rect(&r, 300, 400, 700, 600, 0, 5);
+    check("one hole", &r);
+
+    /* 400 small square holes in a grid */
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 4100, 4100, 1, 99);
+    for (int i = 0; i < 20; i++)
+        for (int j = 0; j < 20; j++)
+            rect(&r, 100 + 200 * i, 100 + 200 * j, 200 + 200 * i,
+                 200 + 200 * j, 0, (i + j) % 3);
+    check("400 holes", &r);
+
+    /* cocircular: 1x1 holes on a lattice, every lattice point is a vertex,
+     * cocircular quadruples everywhere */
+    wm_rings_clear(&r);
+    {
+        const int g = 30, side = 2 * g + 1;
+        rect(&r, 0, 0, side, side, 1, side - 1);
+        for (int i = 0; i < g; i++)
+            for (int j = 0; j < g; j++)
+                rect(&r, 2 * i + 1, 2 * j + 1, 2 * i + 2, 2 * j + 2, 0, 0);
+    }
+    check("cocircular lattice", &r);
+
+    /* the same, scaled up to the top of the lattice range */
+    wm_rings_clear(&r);
+    {
+        const int g = 20, side = 2 * g + 1, k = (1 << 24) / side;
+        rect(&r, 0, 0, side * k, side * k, 1, side - 1);
+        for (int i = 0; i < g; i++)
+            for (int j = 0; j < g; j++)
+                rect(&r, (2 * i + 1) * k, (2 * j + 1) * k, (2 * i + 2) * k,
+                     (2 * j + 2) * k, 0, 0);
+    }
+    check("cocircular lattice, scaled", &r);
+
+    /* large star-shaped polygons */
+    /* (TAP_OK evaluates its condition twice: generate first) */
+    wm_rings_clear(&r);
+    int simple = polar(&r, 100000, smooth);
+    TAP_OK(simple, "smooth polar 1e5: generator simple");
+    double dt = check("smooth polar 1e5", &r);
+    printf("# smooth polar polygon, 1e5 vertices: %.3f s\n", dt);
+
+    wm_rings_clear(&r);
+    simple = polar(&r, 100000, spiky);
+    TAP_OK(simple, "spiky polar 1e5: generator simple");
+    dt = check("spiky polar 1e5", &r);
+    printf("# spiky polar polygon (random radii), 1e5 vertices: %.3f s\n",
+           dt);
+
+    /* a large square with 25000 points per side and 2500 holes */
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 1 << 24, 1 << 24, 1, 24999);
+    for (int i = 0; i < 50; i++)
+        for (int j = 0; j < 50; j++)
+            rect(&r, 100000 + 330000 * i, 100000 + 330000 * j,
+                 300000 + 330000 * i, 300000 + 330000 * j, 0, 1 + (i * j) % 7);
+    dt = check("square 25000/side, 2500 holes", &r);
+    printf("# square with 2500 holes, %zu vertices: %.3f s\n", r.npts, dt);
+
+    if (getenv("WM_TEST_BIG"))
+    {
+        wm_rings_clear(&r);
+        polar(&r, 1000000, smooth);
+        dt = check("smooth polar 1e6", &r);
+        printf("# smooth polar polygon, 1e6 vertices: %.3f s\n", dt);
+        wm_rings_clear(&r);
+        polar(&r, 1000000, spiky);
+        dt = check("spiky polar 1e6", &r);
+        printf("# spiky polar polygon, 1e6 vertices: %.3f s\n", dt);
+    }
+
+    /* invalid input */
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 100, 100, 1, 0);
+    rect(&r, 50, 50, 150, 150, 0, 0);
+    expect_invalid("hole crossing the outer ring", &r);
+
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 10, 10, 1, 0);
+    push(&r, 0, 0);
+    push(&r, 3, 5);
+    push(&r, 5, 3);
+    close_ring(&r);
+    expect_invalid("duplicate vertex", &r);
+
+    /* the edge (12,15)-(12,0) crosses (0,5)-(20,5); the area is positive */
+    wm_rings_clear(&r);
+    push(&r, 0, 5);
+    push(&r, 20, 5);
+    push(&r, 20, 15);
+    push(&r, 12, 15);
+    push(&r, 12, 0);
+    close_ring(&r);
+    expect_invalid("self-crossing ring", &r);
+
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 10, 10, 1, 0);
+    push(&r, 5, 0);
+    push(&r, 4, 5);
+    push(&r, 6, 5);
+    close_ring(&r);
+    expect_invalid("hole vertex on the outer ring", &r);
+
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 10, 10, 1, 0);
+    rect(&r, 20, 20, 30, 30, 0, 0);
+    expect_invalid("hole outside the outer ring", &r);
+
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 100, 100, 1, 0);
+    rect(&r, 10, 10, 90, 90, 0, 0);
+    rect(&r, 20, 20, 80, 80, 0, 0);
+    expect_invalid("nested holes", &r);
+
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 10, 10, 1, 0);
+    rect(&r, 2, 2, 8, 8, 1, 0);
+    expect_invalid("counter-clockwise hole", &r);
+
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, (1 << 24) + 1, 10, 1, 0);
+    expect_invalid("coordinate out of range", &r);
+
+    {
+        uint32_t *tris = NULL;
+        size_t nt = 0;
+        TAP_EQ(wm_cdt_triangulate(NULL, NULL, 1, &tris, &nt, NULL),
+               WM_ERR_INVALID, "NULL input rejected, NULL ctx accepted");
+    }
+
+    wm_rings_free(&r);
+    return TAP_DONE();
+}
