@@ -8,7 +8,7 @@
 #include <string.h>
 
 /* Adds a river polyline given in pixels (x0,y0,x1,y1,...), radius in px. */
-static void su_river(wm_scene *s, const double *xy, int npts, double r)
+static inline void su_river(wm_scene *s, const double *xy, int npts, double r)
 {
     s->segs = realloc(s->segs, (s->nsegs + (size_t)npts) * sizeof *s->segs);
     for (int i = 0; i + 1 < npts; i++)
@@ -24,7 +24,7 @@ static void su_river(wm_scene *s, const double *xy, int npts, double r)
 
 /* Adds a lake polygon made of nrings rings (pixels), ring k having
  * counts[k] points, all concatenated in xy. */
-static void su_lake(wm_scene *s, const double *xy, const int *counts,
+static inline void su_lake(wm_scene *s, const double *xy, const int *counts,
                     int nrings)
 {
     size_t total = 0;
@@ -52,14 +52,14 @@ static void su_lake(wm_scene *s, const double *xy, const int *counts,
     s->poly_start[++s->npolys] = s->nedges;
 }
 
-static void su_init(wm_scene *s, int32_t n)
+static inline void su_init(wm_scene *s, int32_t n)
 {
     memset(s, 0, sizeof *s);
     s->n = n;
     s->band = 2;
 }
 
-static void su_finish(wm_scene *s)
+static inline void su_finish(wm_scene *s)
 {
     if (!s->poly_start)
         s->poly_start = calloc(1, sizeof *s->poly_start);

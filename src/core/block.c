@@ -186,9 +186,9 @@ wm_status wm_block_run(const wm_scene *s, int64_t bx, int64_t by,
     double t1 = wm_now();
     res->seconds[WM_STAGE_FIELD] = t1 - t0;
     st = wm_contour_extract(&f, &raw, ctx);
-    wm_field_free(&f);
     if (st == WM_OK)
-        st = wm_crease_recover(s, bx, by, &raw, ctx);
+        st = wm_crease_recover(s, &f, bx, by, &raw, ctx);
+    wm_field_free(&f);
     double t2 = wm_now();
     res->seconds[WM_STAGE_EXTRACT] = t2 - t1;
     if (st != WM_OK)

@@ -17,20 +17,26 @@
  *      from the same input item skipped), kept when strictly inside the
  *      block;
  *   3. for each candidate C (lattice-snapped), the nearest ring edge; C is
- *      kept when it is 1/4 .. 4 pixels away (closer: nothing to recover),
- *      lies on the union's boundary (no input covers it by more than a
- *      lattice unit: then it is a corner of the union) and its edge is not
- *      on the block square (seams stay exact, invariant 4);
- *   4. C is inserted into that edge when the two new edges meet no other
- *      ring edge and the triangle they add or cut contains no ring vertex
- *      (exact lattice predicates), so the rings stay simple, disjoint and
- *      keep their nesting (invariant 3). At most one insertion per edge.
+ *      tried when it is 1/4 .. 16 pixels away (closer: nothing to
+ *      recover), on that edge or, failing that, on a neighbouring one (a
+ *      truncated tip ends in a vertex), never on an edge of the block
+ *      square (seams stay exact, invariant 4);
+ *   4. C is inserted when the two new edges meet no other ring edge and
+ *      the triangle they add or cut contains no ring vertex (exact lattice
+ *      predicates), so the rings stay simple, disjoint and keep their
+ *      nesting (invariant 3); and when the new edges follow the union's
+ *      boundary (C on it, the edges within half a pixel of it, by a direct
+ *      distance evaluation), so a corner of an input that sampling missed
+ *      altogether does not become a spike. At most one corner per edge and
+ *      pass; up to four passes.
  * Floating point decides only which corners to try, never validity.
  *
  * Cost: O(primitives + candidates * local edges); candidates are few (one
  * per crossing of input boundaries).
  */
 #include "crease.h"
+
+#include "field.h"
 
 #include "lattice.h"
 
@@ -50,6 +56,11 @@ typedef struct
     uint64_t key;
     uint32_t ref;
 } cellref;
+
+static uint64_t ckey(int64_t cx, int64_t cy)
+{
+    return ((uint64_t)(uint32_t)(int32_t)cy << 32) | (uint32_t)(int32_t)cx;
+}
 
 static int cmp_cellref(const void *a, const void *b)
 {
@@ -213,25 +224,33 @@ static double seg_dist(const inputs *in, int64_t ax, int64_t ay, int64_t bx,
     return sqrt(ex * ex + ey * ey);
 }
 
-/* True when no input covers (x, y) by more than `tol`: the point is on or
- * outside every input, so a point on two boundaries is on the union's. */
-static int on_union_boundary(const inputs *in, double x, double y,
-                             double tol)
+/* Signed distance (lattice units, negative in water) from (x, y) to the
+ * union of the block's inputs, in double precision; inputs farther than
+ * `reach` are ignored (the result is then +reach or more). */
+static double union_distance(const inputs *in, double x, double y,
+                             double reach)
 {
     const wm_scene *s = in->s;
+    double d = reach;
+    const double gx = x + (double)in->X0, gy = y + (double)in->Y0;
     for (size_t i = 0; i < in->nsegs; i++)
     {
         const wm_river_seg *g = &s->segs[in->segs[i]];
-        if (seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y) < g->r - tol)
-            return 0;
+        const double m = g->r + reach;
+        if (gx < (double)(g->ax < g->bx ? g->ax : g->bx) - m ||
+            gx > (double)(g->ax > g->bx ? g->ax : g->bx) + m ||
+            gy < (double)(g->ay < g->by ? g->ay : g->by) - m ||
+            gy > (double)(g->ay > g->by ? g->ay : g->by) + m)
+            continue;
+        const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y) - g->r;
+        d = v < d ? v : d;
     }
     for (size_t k = 0; k < in->npolys; k++)
     {
         const uint32_t p = in->polys[k];
         const wm_box b = s->poly_box[p];
-        const double gx = x + (double)in->X0, gy = y + (double)in->Y0;
-        if (gx < (double)b.x0 || gx > (double)b.x1 || gy < (double)b.y0 ||
-            gy > (double)b.y1)
+        if (gx < (double)b.x0 - reach || gx > (double)b.x1 + reach ||
+            gy < (double)b.y0 - reach || gy > (double)b.y1 + reach)
             continue;
         int inside = 0;
         double dmin = INFINITY;
@@ -247,32 +266,52 @@ static int on_union_boundary(const inputs *in, double x, double y,
                 if (x < ax + (y - ay) * (bxx - ax) / (by - ay))
                     inside = !inside;
             }
-            const double d = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y);
-            dmin = d < dmin ? d : dmin;
+            const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y);
+            dmin = v < dmin ? v : dmin;
         }
-        if (inside && dmin > tol)
-            return 0;
+        const double v = inside ? -dmin : dmin;
+        d = v < d ? v : d;
+    }
+    return d;
+}
+
+/* True when the new edges a - c - b (c on the union's boundary) stay within
+ * half a pixel of that boundary.
+ * Rejects corners of inputs the sampling missed altogether (a lake smaller
+ * than a pixel), which would otherwise become spikes. */
+static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
+{
+    const double reach = 4.0 * WM_Q;
+    for (int e = 0; e < 2; e++)
+    {
+        const wm_pt p = e ? b : a;
+        for (int k = 1; k < 4; k++)
+        {
+            const double t = k / 4.0;
+            const double x = c.x + t * (p.x - c.x), y = c.y + t * (p.y - c.y);
+            if (fabs(union_distance(in, x, y, reach)) > 0.5 * WM_Q)
+                return 0;
+        }
     }
     return 1;
 }
 
 /* ---- ring edges in a grid --------------------------------------------- */
 
-#define RCELL (2 * WM_Q) /* ring grid cell: 2 pixels */
+#define RCELL (8 * WM_Q) /* ring grid cell: 8 pixels */
+/* Farthest a corner is looked for from the sampled rings: the tip of a
+ * 5 degree wedge (pixel / (2 tan 2.5 deg) = 11.5 px) is within reach. */
+#define WM_CREASE_REACH (16 * WM_Q)
 
+/* The rings' edges in a dense grid over the block (CSR by cell). */
 typedef struct
 {
     const wm_rings *r;
-    cellref *cells; /* sorted by key; ref = global vertex index k (edge
-                       from k to its successor) */
-    size_t ncells;
+    int32_t side;    /* cells per side */
+    size_t *start;   /* side*side + 1 */
+    uint32_t *edges; /* edge k = from vertex k to its successor */
     size_t *ring_of; /* vertex -> ring */
 } ringgrid;
-
-static uint64_t ckey(int64_t cx, int64_t cy)
-{
-    return ((uint64_t)(uint32_t)(int32_t)cy << 32) | (uint32_t)(int32_t)cx;
-}
 
 static size_t succ(const wm_rings *r, const size_t *ring_of, size_t k)
 {
@@ -286,35 +325,67 @@ static size_t pred(const wm_rings *r, const size_t *ring_of, size_t k)
     return k == r->start[ri] ? r->start[ri + 1] - 1 : k - 1;
 }
 
-static wm_status build_ringgrid(ringgrid *g, const wm_rings *r)
+static int32_t cell_of(const ringgrid *g, int32_t v)
 {
-    size_t n = 0, cap = 0;
+    const int32_t c = v / RCELL;
+    return c < 0 ? 0 : (c >= g->side ? g->side - 1 : c);
+}
+
+static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S)
+{
     g->r = r;
-    g->cells = NULL;
+    g->side = S / RCELL + 1;
+    const size_t ncell = (size_t)g->side * (size_t)g->side;
     g->ring_of = malloc((r->npts + 1) * sizeof *g->ring_of);
-    if (!g->ring_of)
+    g->start = calloc(ncell + 1, sizeof *g->start);
+    if (!g->ring_of || !g->start)
         return WM_ERR_NOMEM;
     for (size_t ri = 0; ri < r->nrings; ri++)
         for (size_t k = r->start[ri]; k < r->start[ri + 1]; k++)
             g->ring_of[k] = ri;
-    for (size_t k = 0; k < r->npts; k++)
+    size_t *cur = NULL;
+    for (int pass = 0; pass < 2; pass++)
     {
-        const wm_pt a = r->pts[k], b = r->pts[succ(r, g->ring_of, k)];
-        const int32_t x0 = (a.x < b.x ? a.x : b.x) / RCELL;
-        const int32_t x1 = (a.x > b.x ? a.x : b.x) / RCELL;
-        const int32_t y0 = (a.y < b.y ? a.y : b.y) / RCELL;
-        const int32_t y1 = (a.y > b.y ? a.y : b.y) / RCELL;
-        for (int32_t cy = y0; cy <= y1; cy++)
-            for (int32_t cx = x0; cx <= x1; cx++)
+        for (size_t k = 0; k < r->npts; k++)
+        {
+            const wm_pt a = r->pts[k], b = r->pts[succ(r, g->ring_of, k)];
+            const int32_t x0 = cell_of(g, a.x < b.x ? a.x : b.x);
+            const int32_t x1 = cell_of(g, a.x > b.x ? a.x : b.x);
+            const int32_t y0 = cell_of(g, a.y < b.y ? a.y : b.y);
+            const int32_t y1 = cell_of(g, a.y > b.y ? a.y : b.y);
+            for (int32_t cy = y0; cy <= y1; cy++)
+                for (int32_t cx = x0; cx <= x1; cx++)
+                {
+                    const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
+                    if (pass == 0)
+                        g->start[c + 1]++;
+                    else
+                        g->edges[cur[c]++] = (uint32_t)k;
+                }
+        }
+        if (pass == 0)
+        {
+            for (size_t c = 0; c < ncell; c++)
+                g->start[c + 1] += g->start[c];
+            g->edges = malloc((g->start[ncell] + 1) * sizeof *g->edges);
+            cur = malloc((ncell + 1) * sizeof *cur);
+            if (!g->edges || !cur)
             {
-                const cellref c = {ckey(cx, cy), (uint32_t)k};
-                if (!push((void **)&g->cells, &n, &cap, &c, sizeof c))
-                    return WM_ERR_NOMEM;
+                free(cur);
+                return WM_ERR_NOMEM;
             }
+            memcpy(cur, g->start, ncell * sizeof *cur);
+        }
     }
-    qsort(g->cells, n, sizeof *g->cells, cmp_cellref);
-    g->ncells = n;
+    free(cur);
     return WM_OK;
+}
+
+static void free_ringgrid(ringgrid *g)
+{
+    free(g->start);
+    free(g->edges);
+    free(g->ring_of);
 }
 
 /* Calls fn(edge k) for each edge registered in cells touching the box
@@ -323,25 +394,14 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r)
 static int visit_edges(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
                        int32_t y1, int (*fn)(void *, size_t), void *arg)
 {
-    if (x0 < 0)
-        x0 = 0;
-    if (y0 < 0)
-        y0 = 0;
-    for (int32_t cy = y0 / RCELL; cy <= y1 / RCELL; cy++)
-        for (int32_t cx = x0 / RCELL; cx <= x1 / RCELL; cx++)
+    const int32_t cx0 = cell_of(g, x0), cx1 = cell_of(g, x1);
+    const int32_t cy0 = cell_of(g, y0), cy1 = cell_of(g, y1);
+    for (int32_t cy = cy0; cy <= cy1; cy++)
+        for (int32_t cx = cx0; cx <= cx1; cx++)
         {
-            const uint64_t key = ckey(cx, cy);
-            size_t lo = 0, hi = g->ncells;
-            while (lo < hi)
-            {
-                const size_t mid = (lo + hi) / 2;
-                if (g->cells[mid].key < key)
-                    lo = mid + 1;
-                else
-                    hi = mid;
-            }
-            for (; lo < g->ncells && g->cells[lo].key == key; lo++)
-                if (!fn(arg, g->cells[lo].ref))
+            const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
+            for (size_t i = g->start[c]; i < g->start[c + 1]; i++)
+                if (!fn(arg, g->edges[i]))
                     return 0;
         }
     return 1;
@@ -432,9 +492,9 @@ static int check_fn(void *arg, size_t k)
 
 /* True when c may be inserted into edge ka (to its successor) of the
  * current rings: see the file comment, step 4. */
-static int can_insert(const ringgrid *g, size_t ka, wm_pt c, int32_t S,
-                      const uint8_t *split, const insertion *ins,
-                      size_t nins)
+static int can_insert(const inputs *in, const ringgrid *g, size_t ka,
+                      wm_pt c, int32_t S, const uint8_t *split,
+                      const insertion *ins, size_t nins)
 {
     const wm_rings *rings = g->r;
     const size_t kb = succ(rings, g->ring_of, ka);
@@ -464,7 +524,7 @@ static int can_insert(const ringgrid *g, size_t ka, wm_pt c, int32_t S,
                 if (wm_segments_meet(ne[e][0], ne[e][1], oe[f][0], oe[f][1]))
                     ck.ok = 0;
     }
-    return ck.ok;
+    return ck.ok && follows_boundary(in, a, c, b);
 }
 
 /* One pass: tries every candidate against the current rings and rebuilds
@@ -483,7 +543,7 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
     memset(&g, 0, sizeof g);
     memset(&out, 0, sizeof out);
     *ninserted = 0;
-    st = build_ringgrid(&g, rings);
+    st = build_ringgrid(&g, rings, S);
     if (st != WM_OK)
         goto nomem;
     split = calloc(rings->npts + 1, 1);
@@ -494,12 +554,23 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
         if (i > 0 && wm_pt_eq(cand[i], cand[i - 1]))
             continue;
         const wm_pt c = cand[i];
+        /* nearest edge: a small search first (most corners are already
+         * within a quarter pixel), then up to WM_CREASE_REACH */
         nearest nr = {&g, c.x, c.y, INFINITY, SIZE_MAX};
-        const int32_t R = 4 * WM_Q;
+        int32_t R = WM_Q;
         visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn, &nr);
-        if (nr.edge == SIZE_MAX || nr.best <= WM_Q / 4.0 || nr.best > R)
+        if (nr.best <= WM_Q / 4.0)
             continue;
-        if (!on_union_boundary(in, c.x, c.y, 1.0))
+        if (nr.best > R)
+        {
+            R = WM_CREASE_REACH;
+            visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
+                        &nr);
+        }
+        if (nr.edge == SIZE_MAX || nr.best > R)
+            continue;
+        /* a corner of the union, not one buried under another input */
+        if (fabs(union_distance(in, c.x, c.y, 4.0 * WM_Q)) > 1.0)
             continue;
         /* the nearest edge, else one of its neighbours (a truncated tip
          * ends in a vertex: either edge at it may be the one to split) */
@@ -507,7 +578,7 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
                                  pred(rings, g.ring_of, nr.edge)};
         size_t ka = SIZE_MAX;
         for (int t = 0; t < 3 && ka == SIZE_MAX; t++)
-            if (can_insert(&g, tries[t], c, S, split, ins, nins))
+            if (can_insert(in, &g, tries[t], c, S, split, ins, nins))
                 ka = tries[t];
         if (ka == SIZE_MAX)
             continue;
@@ -550,14 +621,14 @@ nomem:
 cleanup:
     free(ins);
     free(split);
-    free(g.cells);
-    free(g.ring_of);
+    free_ringgrid(&g);
     wm_rings_free(&out);
     return st;
 }
 
-wm_status wm_crease_recover(const wm_scene *s, int64_t bx, int64_t by,
-                            wm_rings *rings, const wm_ctx *ctx)
+wm_status wm_crease_recover(const wm_scene *s, const wm_field *f,
+                            int64_t bx, int64_t by, wm_rings *rings,
+                            const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
     prim *pr = NULL;
@@ -671,6 +742,13 @@ wm_status wm_crease_recover(const wm_scene *s, int64_t bx, int64_t by,
                         continue; /* keep a pixel off the block square */
                     const wm_pt c = {(int32_t)llround(hit[h].x),
                                      (int32_t)llround(hit[h].y)};
+                    /* the field is 1-Lipschitz: a point of the boundary is
+                     * within 0.71 px of a sample valued within 0.71 px of
+                     * 0; anything else is buried under another input */
+                    const float v = wm_field_at(f, (c.x + WM_Q / 2) / WM_Q,
+                                                (c.y + WM_Q / 2) / WM_Q);
+                    if (fabsf(v) > 0.75f)
+                        continue;
                     if (!push((void **)&cand, &ncand, &candcap, &c, sizeof c))
                         goto nomem;
                 }

@@ -4,7 +4,7 @@
 #ifndef WM_CREASE_H
 #define WM_CREASE_H
 
-#include "scene.h"
+#include "field.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -12,24 +12,28 @@ extern "C" {
 
 /**
  * Inserts the exact crease corners of block (bx, by) into its extracted
- * rings (block-local lattice units, as from wm_contour_extract).
+ * rings (block-local lattice units, as from wm_contour_extract on the
+ * block's field `f`, which also serves to discard crossings buried under
+ * other inputs).
  *
  * Where the boundaries of two inputs cross (a river bank meeting a lake
- * shore or another bank, the inner side of a sharp bend) the union's
- * boundary has a corner. A sampled field loses the tip of a sharp corner
- * (by about pixel / (2 tan(angle / 2))); this puts the corner back: each
- * crossing point C of two input boundaries that lies on the union's
- * boundary, strictly inside the block, and more than a quarter pixel from
- * the rings, is inserted into the nearest ring edge (never an edge on the
- * block square), when the two new edges meet no other edge and the
- * triangle they add or cut contains no ring vertex (exact predicates).
- * Otherwise it is skipped: the rings stay valid, at worst unimproved.
+ * shore or another bank, the inner side of a sharp bend, a lake vertex)
+ * the union's boundary has a corner. A sampled field loses the tip of a
+ * sharp corner (by about pixel / (2 tan(angle / 2))); this puts it back:
+ * each crossing point C of two input boundaries, strictly inside the block
+ * and 1/4 to 16 pixels from the rings, is inserted into the nearest ring
+ * edge (or a neighbour of it; never an edge on the block square) when the
+ * two new edges meet no other edge, the triangle they add or cut contains
+ * no ring vertex (exact predicates), and the new edges follow the union's
+ * boundary within half a pixel. Otherwise it is skipped: the rings stay
+ * valid, at worst unimproved.
  *
  * Deterministic: candidates are found in a fixed order and inserted in
  * lexicographic order of their lattice position.
  */
-wm_status wm_crease_recover(const wm_scene *s, int64_t bx, int64_t by,
-                            wm_rings *rings, const wm_ctx *ctx);
+wm_status wm_crease_recover(const wm_scene *s, const wm_field *f,
+                            int64_t bx, int64_t by, wm_rings *rings,
+                            const wm_ctx *ctx);
 
 #ifdef __cplusplus
 }
