@@ -4,7 +4,8 @@
  * into in-memory layers and prints what it got. autotest/test_capi.py runs
  * it.
  *
- * Usage: capi_demo <rivers_ds|-> <lakes_ds|-> [--cancel] [NAME=VALUE]...
+ * Usage: capi_demo <rivers_ds|-> <rivers_layer> <lakes_ds|-> <lakes_layer>
+ *                  [--cancel] [NAME=VALUE]...
  * Prints: "water <n> mesh <m> area <a> progress_calls <k>"; exits 0 on
  * success, 2 when cancelled (CPLE_UserInterrupt), 1 on any other failure.
  */
@@ -27,32 +28,35 @@ static int CPL_STDCALL progress(double f, const char *m, void *cancel)
     return !(cancel && g_calls > 1);
 }
 
-static OGRLayerH first_layer(const char *path, GDALDatasetH *ds)
+static OGRLayerH open_layer(const char *path, const char *name,
+                            GDALDatasetH *ds)
 {
     *ds = NULL;
     if (!strcmp(path, "-"))
         return NULL;
     *ds = GDALOpenEx(path, GDAL_OF_VECTOR, NULL, NULL, NULL);
-    return *ds ? GDALDatasetGetLayer(*ds, 0) : NULL;
+    return *ds ? GDALDatasetGetLayerByName(*ds, name) : NULL;
 }
 
 int main(int argc, char **argv)
 {
-    if (argc < 3)
+    if (argc < 5)
     {
-        fprintf(stderr, "usage: capi_demo rivers lakes [--cancel] [K=V]...\n");
+        fprintf(stderr, "usage: capi_demo rivers rivers_layer lakes "
+                        "lakes_layer [--cancel] [K=V]...\n");
         return 1;
     }
     GDALAllRegister();
     int cancel = 0;
     char **opts = NULL;
-    for (int i = 3; i < argc; i++)
+    for (int i = 5; i < argc; i++)
         if (!strcmp(argv[i], "--cancel"))
             cancel = 1;
         else
             opts = CSLAddString(opts, argv[i]);
     GDALDatasetH dr, dl;
-    OGRLayerH r = first_layer(argv[1], &dr), l = first_layer(argv[2], &dl);
+    OGRLayerH r = open_layer(argv[1], argv[2], &dr);
+    OGRLayerH l = open_layer(argv[3], argv[4], &dl);
 
     OGRSpatialReferenceH srs = WMGetWorkingSRS(r, l, opts);
     if (!srs)
