@@ -137,6 +137,13 @@ static int move_into_place(const char *tmpdir, const char *dstdir,
 
 int main(int argc, char **argv)
 {
+    for (int i = 1; i < argc; i++)
+        if (EQUAL(argv[i], "--version"))
+        { /* ours, before GDAL's general options answer with GDAL's */
+            printf("gdal_watermesh %s (GDAL %s)\n", WMVersion(),
+                   GDALVersionInfo("RELEASE_NAME"));
+            return 0;
+        }
     GDALAllRegister();
     argc = GDALGeneralCmdLineProcessor(argc, &argv, 0);
     if (argc < 1)
@@ -153,13 +160,6 @@ int main(int argc, char **argv)
         const int more = i + 1 < argc;
         if (EQUAL(a, "--help") || EQUAL(a, "-h"))
             usage(0);
-        else if (EQUAL(a, "--version"))
-        {
-            printf("gdal_watermesh %s (GDAL %s)\n", WMVersion(),
-                   GDALVersionInfo("RELEASE_NAME"));
-            CSLDestroy(argv);
-            return 0;
-        }
         else if (EQUAL(a, "-of") && more)
             format = argv[++i];
         else if (EQUAL(a, "-lco") && more)

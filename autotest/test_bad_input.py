@@ -242,3 +242,10 @@ def test_rivers_and_lakes_in_different_crs(wm, tmp_dir):
     from shapely.geometry import Point
     x, y = scenes.xy(225, 540)
     assert any(f.geom.contains(Point(x, y)) for f in res.water)
+
+
+def test_non_metric_crs_refused(wm, tmp_dir):
+    # widths and PIXEL_SIZE are metres: a CRS in US feet is refused
+    p = scenes.make_bad_scene(os.path.join(tmp_dir, 'feet_rivers.shp'), 'no_crs')
+    assert_refused(wm, {'RIVERS': p, 'TARGET_SRS': 'EPSG:2263'},
+                   all_of=['metres', 'TARGET_SRS'])

@@ -3,9 +3,8 @@
 
 Usage: render_mesh.py OUT.gpkg PICTURE.png [xmin ymin xmax ymax]
 
-Water polygons are filled, triangle edges drawn as a wireframe, block
-borders dashed. With a window, only that part is drawn (a close-up of a
-junction, say).
+Water polygons are filled, triangle edges drawn as a wireframe. With a
+window, only that part is drawn (a close-up of a junction, say).
 """
 import sys
 

@@ -31,8 +31,11 @@
  *      pass; up to four passes.
  * Floating point decides only which corners to try, never validity.
  *
- * Cost: O(primitives + candidates * local edges); candidates are few (one
- * per crossing of input boundaries).
+ * Cost: O(primitives + pairs sharing a grid cell) to find candidates; the
+ * field discards the buried ones at O(1) each; every remaining candidate
+ * costs a local ring-grid search and, when it is more than 1/4 pixel away,
+ * distance evaluations against the block's inputs (O(inputs in reach)).
+ * Candidates that reach that point are few: one per corner of the union.
  */
 #include "crease.h"
 
@@ -298,7 +301,7 @@ static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
 
 /* ---- ring edges in a grid --------------------------------------------- */
 
-#define RCELL (8 * WM_Q) /* ring grid cell: 8 pixels */
+#define RCELL (16 * WM_Q) /* ring grid cell: 16 pixels */
 /* Farthest a corner is looked for from the sampled rings: the tip of a
  * 5 degree wedge (pixel / (2 tan 2.5 deg) = 11.5 px) is within reach. */
 #define WM_CREASE_REACH (16 * WM_Q)
@@ -308,7 +311,7 @@ typedef struct
 {
     const wm_rings *r;
     int32_t side;    /* cells per side */
-    size_t *start;   /* side*side + 1 */
+    uint32_t *start; /* side*side + 1 */
     uint32_t *edges; /* edge k = from vertex k to its successor */
     size_t *ring_of; /* vertex -> ring */
 } ringgrid;
@@ -343,7 +346,9 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S)
     for (size_t ri = 0; ri < r->nrings; ri++)
         for (size_t k = r->start[ri]; k < r->start[ri + 1]; k++)
             g->ring_of[k] = ri;
-    size_t *cur = NULL;
+    if (r->npts >= UINT32_MAX / 4)
+        return WM_ERR_NOMEM;
+    uint32_t *cur = NULL;
     for (int pass = 0; pass < 2; pass++)
     {
         for (size_t k = 0; k < r->npts; k++)
@@ -400,7 +405,7 @@ static int visit_edges(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
         for (int32_t cx = cx0; cx <= cx1; cx++)
         {
             const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
-            for (size_t i = g->start[c]; i < g->start[c + 1]; i++)
+            for (uint32_t i = g->start[c]; i < g->start[c + 1]; i++)
                 if (!fn(arg, g->edges[i]))
                     return 0;
         }

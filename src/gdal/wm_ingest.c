@@ -43,8 +43,29 @@ static OGRSpatialReferenceH clone_trad(OGRSpatialReferenceH s)
     return c;
 }
 
+static OGRSpatialReferenceH working_srs(OGRLayerH hRivers, OGRLayerH hLakes,
+                                        CSLConstList opts);
+
 OGRSpatialReferenceH WMGetWorkingSRS(OGRLayerH hRivers, OGRLayerH hLakes,
                                      CSLConstList opts)
+{
+    OGRSpatialReferenceH s = working_srs(hRivers, hLakes, opts);
+    if (s && fabs(OSRGetLinearUnits(s, NULL) - 1.0) > 1e-12)
+    {
+        char *name = NULL;
+        OSRGetLinearUnits(s, &name);
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: the working CRS '%s' is in %s, not metres; "
+                 "set TARGET_SRS to a metric projected CRS.",
+                 OSRGetName(s) ? OSRGetName(s) : "?", name ? name : "?");
+        OSRRelease(s);
+        return NULL;
+    }
+    return s;
+}
+
+static OGRSpatialReferenceH working_srs(OGRLayerH hRivers, OGRLayerH hLakes,
+                                        CSLConstList opts)
 {
     const char *target = CSLFetchNameValue(opts, "TARGET_SRS");
     if (target && *target)

@@ -271,12 +271,8 @@ void WMSourcesClose(WMSources *src)
 
 char **WMReadDescriptor(const char *pszPath)
 {
-    CPLXMLNode *root = NULL;
     char **opts = NULL;
-    if (STARTS_WITH_CI(pszPath, "<WaterMesh"))
-        root = CPLParseXMLString(pszPath);
-    else
-        root = CPLParseXMLFile(pszPath);
+    CPLXMLNode *root = CPLParseXMLFile(pszPath);
     if (!root)
     {
         CPLError(CE_Failure, CPLE_AppDefined,
@@ -312,8 +308,7 @@ char **WMReadDescriptor(const char *pszPath)
         }
         const char *v = CPLGetXMLValue(n, NULL, "");
         if ((EQUAL(n->pszValue, "RIVERS") || EQUAL(n->pszValue, "LAKES")) &&
-            *v && CPLIsFilenameRelative(v) && *dir &&
-            !STARTS_WITH(pszPath, "<"))
+            *v && CPLIsFilenameRelative(v) && *dir)
             opts = CSLSetNameValue(opts, n->pszValue,
                                    CPLFormFilename(dir, v, NULL));
         else
