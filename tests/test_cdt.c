@@ -1,8 +1,10 @@
 /*
- * test_cdt.c - wm_cdt_triangulate on small exact cases, on large random
- * polygons and on cocircular lattices; every result is checked for the
- * triangle count, orientation, ring edges, edge manifoldness, exact local
- * Delaunay property and exact area. Invalid inputs must fail cleanly.
+ * test_cdt.c - wm_cdt_triangulate on small exact cases, on cocircular
+ * lattices, on many random polygons with holes on small lattices and on
+ * large random polygons; every result is checked for the triangle count,
+ * orientation, ring edges, edge manifoldness, exact local Delaunay property
+ * and exact area. Invalid inputs must fail cleanly. Set WM_TEST_BIG to add
+ * two polygons of 1e6 vertices.
  */
 #include "cdt.h"
 #include "lattice.h"
@@ -50,7 +52,8 @@ static void rect(wm_rings *r, int x0, int y0, int x1, int y1, int ccw,
     const int cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
     for (int s = 0; s < 4; s++)
     {
-        const int c = ccw ? s : (4 - s) % 4, d = ccw ? (c + 1) % 4 : (c + 3) % 4;
+        const int c = ccw ? s : (4 - s) % 4;
+        const int d = ccw ? (c + 1) % 4 : (c + 3) % 4;
         for (int k = 0; k <= extra; k++)
         {
             const long long t = k, m = extra + 1;
@@ -122,50 +125,50 @@ static double now_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Triangulates r and checks everything; returns the seconds spent in
- * wm_cdt_triangulate. */
-static double check(const char *name, const wm_rings *r)
+/* What verify() finds wrong with a triangulation (all zero when right). */
+typedef struct
 {
-    const wm_ctx ctx = {on_error, NULL};
-    uint32_t *tris = NULL;
-    size_t nt = 0;
+    size_t bad_count, bad_ccw, bad_area, missing_ring, bad_ring;
+    size_t bad_shared, bad_delaunay, interior;
+} verdict;
+
+static size_t verdict_errors(const verdict *v)
+{
+    return v->bad_count + v->bad_ccw + v->bad_area + v->missing_ring +
+           v->bad_ring + v->bad_shared + v->bad_delaunay;
+}
+
+/* Checks tris against the rings, exactly: count, orientation, area, ring
+ * edges, manifold edges, local Delaunay property. */
+static verdict verify(const wm_rings *r, const uint32_t *tris, size_t nt)
+{
+    verdict vd;
+    memset(&vd, 0, sizeof vd);
     const size_t n = r->npts;
-    const double t0 = now_s();
-    const wm_status st =
-        wm_cdt_triangulate(r->pts, r->start, r->nrings, &tris, &nt, &ctx);
-    const double dt = now_s() - t0;
-    TAP_EQ(st, WM_OK, "%s: status (%zu vertices, %zu holes)", name, n,
-           r->nrings - 1);
-    if (st != WM_OK)
-    {
-        free(tris);
-        return dt;
-    }
-    TAP_EQ(nt, n + 2 * (r->nrings - 1) - 2, "%s: triangle count", name);
+    vd.bad_count = nt != n + 2 * (r->nrings - 1) - 2;
 
     /* orientation, indices, area */
-    size_t bad_ccw = 0;
     wm_i128 area = 0, ring_area = 0;
     for (size_t t = 0; t < nt; t++)
     {
         const uint32_t *v = tris + 3 * t;
         if (v[0] >= n || v[1] >= n || v[2] >= n)
         {
-            bad_ccw++;
+            vd.bad_ccw++;
             continue;
         }
         if (wm_orient(r->pts[v[0]], r->pts[v[1]], r->pts[v[2]]) <= 0)
-            bad_ccw++;
+            vd.bad_ccw++;
         area += wm_orient_det(r->pts[v[0]], r->pts[v[1]], r->pts[v[2]]);
     }
     for (size_t i = 0; i < r->nrings; i++)
         ring_area += wm_ring_area2(r->pts + r->start[i], wm_rings_len(r, i));
-    TAP_EQ(bad_ccw, 0, "%s: every triangle counter-clockwise", name);
-    TAP_OK(area == ring_area, "%s: triangle area == polygon area (%.17g)",
-           name, (double)ring_area);
+    vd.bad_area = area != ring_area;
+    if (vd.bad_ccw)
+        return vd; /* indices may be out of range: stop here */
 
-    /* edges */
-    hedge *he = malloc(3 * nt * sizeof *he);
+    /* edges: every triangle side, sorted by undirected edge */
+    hedge *he = malloc((3 * nt + 1) * sizeof *he);
     redge *re = malloc(n * sizeof *re);
     if (!he || !re)
         abort();
@@ -195,8 +198,7 @@ static double check(const char *name, const wm_rings *r)
     }
     qsort(he, 3 * nt, sizeof *he, cmp_hedge);
     qsort(re, n, sizeof *re, cmp_redge);
-    size_t ring_found = 0, bad_ring = 0, bad_shared = 0, bad_delaunay = 0;
-    size_t interior = 0;
+    size_t ring_found = 0;
     for (size_t i = 0; i < 3 * nt;)
     {
         size_t j = i + 1;
@@ -208,29 +210,59 @@ static double check(const char *name, const wm_rings *r)
             ring_found++;
             /* exactly one triangle, on the left of the ring's direction */
             if (j - i != 1 || he[i].from != ring->from)
-                bad_ring++;
+                vd.bad_ring++;
         }
         else if (j - i != 2 || he[i].from == he[i + 1].from)
-            bad_shared++;
+            vd.bad_shared++;
         else
         {
-            interior++;
+            vd.interior++;
             const hedge *a = he + i, *b = he + i + 1;
             const uint32_t to = a->from == a->lo ? a->hi : a->lo;
             if (wm_incircle(r->pts[a->from], r->pts[to], r->pts[a->opp],
                             r->pts[b->opp]) > 0)
-                bad_delaunay++;
+                vd.bad_delaunay++;
         }
         i = j;
     }
-    TAP_EQ(ring_found, n, "%s: every ring edge is a triangle edge", name);
-    TAP_EQ(bad_ring, 0, "%s: ring edges bound one triangle, water left",
-           name);
-    TAP_EQ(bad_shared, 0, "%s: other edges shared by two triangles", name);
-    TAP_EQ(bad_delaunay, 0, "%s: %zu interior edges locally Delaunay", name,
-           interior);
+    vd.missing_ring = n - ring_found;
     free(he);
     free(re);
+    return vd;
+}
+
+/* Triangulates r and checks everything, one TAP line per property;
+ * returns the seconds spent in wm_cdt_triangulate. */
+static double check(const char *name, const wm_rings *r)
+{
+    const wm_ctx ctx = {on_error, NULL};
+    uint32_t *tris = NULL;
+    size_t nt = 0;
+    const size_t n = r->npts;
+    const double t0 = now_s();
+    const wm_status st =
+        wm_cdt_triangulate(r->pts, r->start, r->nrings, &tris, &nt, &ctx);
+    const double dt = now_s() - t0;
+    TAP_EQ(st, WM_OK, "%s: status (%zu vertices, %zu holes)", name, n,
+           r->nrings - 1);
+    if (st != WM_OK)
+    {
+        free(tris);
+        return dt;
+    }
+    const verdict vd = verify(r, tris, nt);
+    TAP_EQ(vd.bad_count, 0, "%s: %zu triangles, as the formula says", name,
+           nt);
+    TAP_EQ(vd.bad_ccw, 0, "%s: every triangle counter-clockwise", name);
+    TAP_EQ(vd.bad_area, 0, "%s: triangle area == polygon area", name);
+    TAP_EQ(vd.missing_ring, 0, "%s: every ring edge is a triangle edge",
+           name);
+    TAP_EQ(vd.bad_ring, 0, "%s: ring edges bound one triangle, water left",
+           name);
+    TAP_EQ(vd.bad_shared, 0, "%s: other edges shared by two triangles",
+           name);
+    TAP_EQ(vd.bad_delaunay, 0, "%s: %zu interior edges locally Delaunay",
+           name, vd.interior);
     free(tris);
     return dt;
 }
@@ -286,7 +318,10 @@ static double spiky(size_t i)
     return 8.0e6 * (0.5 + 0.5 * unif());
 }
 
-static double walk_r = 6.0e6;
+/* Radii as a bounded random walk; the walk does not come back to where it
+ * started, so the closing edge is a long radial one that crosses many
+ * triangles of the Delaunay triangulation (a large cavity). */
+static double walk_r;
 
 static double smooth(size_t i)
 {
@@ -297,6 +332,212 @@ static double smooth(size_t i)
     if (walk_r > 8.0e6)
         walk_r = 8.0e6;
     return walk_r;
+}
+
+/* ---- random polygons with holes, on small lattices ---------------------- */
+
+static int rnd(int lo, int hi) /* inclusive */
+{
+    return lo + (int)(lcg() % (uint32_t)(hi - lo + 1));
+}
+
+/* Edge i of ring ri, as two points. */
+static void ring_edge(const wm_rings *r, size_t ri, size_t i, wm_pt *a,
+                      wm_pt *b)
+{
+    const size_t s = r->start[ri], len = wm_rings_len(r, ri);
+    *a = r->pts[s + i];
+    *b = r->pts[s + (i + 1) % len];
+}
+
+/* Brute-force contract check, independent of the code under test: rings
+ * simple and pairwise disjoint, holes inside the outer ring and not in
+ * each other, orientations right. O(n^2). */
+static int rings_valid(const wm_rings *r)
+{
+    for (size_t ri = 0; ri < r->nrings; ri++)
+    {
+        const size_t len = wm_rings_len(r, ri);
+        for (size_t i = 0; i < len; i++)
+        {
+            wm_pt a, b;
+            ring_edge(r, ri, i, &a, &b);
+            for (size_t rj = ri; rj < r->nrings; rj++)
+            {
+                const size_t len2 = wm_rings_len(r, rj);
+                for (size_t j = rj == ri ? i + 1 : 0; j < len2; j++)
+                {
+                    wm_pt c, d;
+                    ring_edge(r, rj, j, &c, &d);
+                    if (rj == ri && (j == i + 1 || (i == 0 && j == len - 1)))
+                    {
+                        /* neighbours share one vertex and must not fold */
+                        const wm_pt q = j == i + 1 ? b : a;
+                        const wm_pt o1 = j == i + 1 ? a : b;
+                        const wm_pt o2 = j == i + 1 ? d : c;
+                        if (wm_pt_eq(o1, o2) ||
+                            (wm_orient(o1, q, o2) == 0 &&
+                             (int64_t)(o1.x - q.x) * (o2.x - q.x) +
+                                     (int64_t)(o1.y - q.y) * (o2.y - q.y) >
+                                 0))
+                            return 0;
+                        continue;
+                    }
+                    if (wm_segments_meet(a, b, c, d))
+                        return 0;
+                }
+            }
+        }
+    }
+    if (wm_ring_area2(r->pts, wm_rings_len(r, 0)) <= 0)
+        return 0;
+    for (size_t ri = 1; ri < r->nrings; ri++)
+    {
+        const wm_pt q = r->pts[r->start[ri]];
+        if (wm_ring_area2(r->pts + r->start[ri], wm_rings_len(r, ri)) >= 0 ||
+            wm_point_in_ring(r->pts, wm_rings_len(r, 0), q) != 1)
+            return 0;
+        for (size_t rj = 1; rj < r->nrings; rj++)
+        {
+            if (rj != ri &&
+                wm_point_in_ring(r->pts + r->start[rj], wm_rings_len(r, rj),
+                                 q) != 0)
+                return 0;
+        }
+    }
+    return 1;
+}
+
+/* A random polygon on an l x l lattice: a star-shaped outer ring (random
+ * angles and radii, some collinear points added on its edges), then up to
+ * maxh random holes (squares, thin or random triangles) kept when valid.
+ * Small lattices give many collinear and cocircular vertices. Returns 0
+ * when the outer ring came out invalid. */
+static int random_polygon(wm_rings *r, int l, int maxh)
+{
+    wm_rings_clear(r);
+    const int nv = rnd(3, 40);
+    double ang[40];
+    for (int i = 0; i < nv; i++)
+        ang[i] = 6.283185307179586 * unif();
+    for (int i = 1; i < nv; i++) /* insertion sort */
+        for (int j = i; j > 0 && ang[j] < ang[j - 1]; j--)
+        {
+            const double t = ang[j];
+            ang[j] = ang[j - 1];
+            ang[j - 1] = t;
+        }
+    for (int i = 0; i < nv; i++)
+    {
+        const double q = (0.1 + 0.4 * unif()) * l;
+        const int x = (int)lround(l / 2.0 + q * cos(ang[i]));
+        const int y = (int)lround(l / 2.0 + q * sin(ang[i]));
+        const size_t np = r->npts;
+        if (np > 0 && r->pts[np - 1].x == x && r->pts[np - 1].y == y)
+            continue;
+        push(r, x, y);
+        /* sometimes a collinear point halfway to the next angle's point */
+        if (i + 1 < nv && rnd(0, 2) == 0)
+        {
+            const double q2 = (0.1 + 0.4 * unif()) * l;
+            const int x2 = (int)lround(l / 2.0 + q2 * cos(ang[i + 1]));
+            const int y2 = (int)lround(l / 2.0 + q2 * sin(ang[i + 1]));
+            if ((x + x2) % 2 == 0 && (y + y2) % 2 == 0)
+            {
+                push(r, (x + x2) / 2, (y + y2) / 2);
+                push(r, x2, y2);
+                i++;
+            }
+        }
+    }
+    if (r->npts < 3)
+        return 0;
+    close_ring(r);
+    if (!rings_valid(r))
+        return 0;
+    const int nh = rnd(0, maxh);
+    for (int h = 0; h < nh; h++)
+    {
+        /* near the centre, where the outer ring surely is */
+        const int lo = l / 2 - l / 5, hi = l / 2 + l / 5;
+        const int kind = rnd(0, 2), x = rnd(lo, hi), y = rnd(lo, hi);
+        if (kind == 0)
+        {
+            const int e = rnd(1, l / 16 > 1 ? l / 16 : 1);
+            push(r, x, y);
+            push(r, x, y + e);
+            push(r, x + e, y + e);
+            push(r, x + e, y);
+        }
+        else
+        {
+            const int x2 = rnd(lo, hi), y2 = rnd(lo, hi);
+            push(r, x, y);
+            push(r, x2, y2);
+            if (kind == 1)
+                push(r, x2 + rnd(-2, 2), y2 + rnd(-2, 2));
+            else
+                push(r, rnd(lo, hi), rnd(lo, hi));
+            const size_t s = r->npts - 3;
+            if (wm_ring_area2(r->pts + s, 3) > 0)
+            {
+                const wm_pt t = r->pts[s + 1];
+                r->pts[s + 1] = r->pts[s + 2];
+                r->pts[s + 2] = t;
+            }
+        }
+        close_ring(r);
+        if (!rings_valid(r))
+        {
+            r->nrings--;
+            r->npts = r->start[r->nrings];
+        }
+    }
+    return 1;
+}
+
+/* Many random polygons: every result must verify. */
+static void random_batch(int cases)
+{
+    wm_rings r;
+    memset(&r, 0, sizeof r);
+    int done = 0, failed = 0;
+    size_t verts = 0, holes = 0;
+    while (done < cases)
+    {
+        const int l = 1 << rnd(3, 10);
+        if (!random_polygon(&r, l, 25))
+            continue;
+        done++;
+        verts += r.npts;
+        holes += r.nrings - 1;
+        uint32_t *tris = NULL;
+        size_t nt = 0;
+        const wm_status st =
+            wm_cdt_triangulate(r.pts, r.start, r.nrings, &tris, &nt, NULL);
+        const verdict vd = verify(&r, tris, st == WM_OK ? nt : 0);
+        if (st != WM_OK || verdict_errors(&vd) != 0)
+        {
+            if (failed++ < 3)
+            {
+                printf("# random case %d failed (status %d):\n", done,
+                       (int)st);
+                for (size_t ri = 0; ri < r.nrings; ri++)
+                {
+                    printf("#   ring %zu:", ri);
+                    for (size_t i = r.start[ri]; i < r.start[ri + 1]; i++)
+                        printf(" %d,%d", (int)r.pts[i].x, (int)r.pts[i].y);
+                    printf("\n");
+                }
+            }
+        }
+        free(tris);
+    }
+    TAP_EQ(failed, 0,
+           "%d random polygons on small lattices (%zu vertices, %zu holes "
+           "in all) give verified CDTs",
+           cases, verts, holes);
+    wm_rings_free(&r);
 }
 
 static void expect_invalid(const char *name, const wm_rings *r)
@@ -374,9 +615,14 @@ int main(void)
     }
     check("cocircular lattice, scaled", &r);
 
+    /* random polygons with holes: collinear and cocircular vertices,
+     * thin holes, cavities that touch themselves */
+    random_batch(1500);
+
     /* large star-shaped polygons */
     /* (TAP_OK evaluates its condition twice: generate first) */
     wm_rings_clear(&r);
+    walk_r = 6.0e6;
     int simple = polar(&r, 100000, smooth);
     TAP_OK(simple, "smooth polar 1e5: generator simple");
     double dt = check("smooth polar 1e5", &r);
@@ -402,6 +648,7 @@ int main(void)
     if (getenv("WM_TEST_BIG"))
     {
         wm_rings_clear(&r);
+        walk_r = 6.0e6;
         polar(&r, 1000000, smooth);
         dt = check("smooth polar 1e6", &r);
         printf("# smooth polar polygon, 1e6 vertices: %.3f s\n", dt);
