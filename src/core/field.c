@@ -4,8 +4,9 @@
  *
  * Method. The window is split into tiles of WM_TILE x WM_TILE cells. River
  * segments (capsules) and lake edges are binned into the tiles they may
- * reach (bounding box grown by radius + band: a conservative superset, which
- * is enough because anything farther than the band is clamped away). A tile
+ * reach (the segment clipped against the tile grown by radius + band: a
+ * conservative superset, which is enough because anything farther than the
+ * band is clamped away). A tile
  * with nothing in reach is uniform: one inside test decides water or land
  * (invariant 6). In the other tiles every sample takes
  *   min( min_rivers |p - seg| - r,  min_lakes (+/-) |p - lake boundary| )
@@ -137,6 +138,42 @@ static void tile_span(int64_t a, int64_t b, int64_t origin, int64_t tsq,
     *hi = (int32_t)h;
 }
 
+/* True when segment [a, b] passes within `grow` (lattice units, a
+ * square neighbourhood: a superset of the round one) of tile (tx, ty):
+ * Liang-Barsky clipping against the tile's box grown by grow + 2 (the
+ * extra two units absorb rounding, so no segment in reach is ever left
+ * out; one out of reach may be kept, which costs time, never accuracy). */
+static int seg_reaches_tile(const work *w, int32_t tx, int32_t ty,
+                            int64_t ax, int64_t ay, int64_t bx, int64_t by,
+                            int64_t grow)
+{
+    const int64_t x0 = w->X0 + (int64_t)tx * w->tsq - grow - 2;
+    const int64_t y0 = w->Y0 + (int64_t)ty * w->tsq - grow - 2;
+    const double wx = (double)(w->tsq + 2 * (grow + 2));
+    const double px = (double)(ax - x0), py = (double)(ay - y0);
+    const double dx = (double)(bx - ax), dy = (double)(by - ay);
+    const double p[4] = {-dx, dx, -dy, dy};
+    const double q[4] = {px, wx - px, py, wx - py};
+    double t0 = 0.0, t1 = 1.0;
+    for (int i = 0; i < 4; i++)
+    {
+        if (p[i] == 0.0)
+        {
+            if (q[i] < 0.0)
+                return 0;
+            continue;
+        }
+        const double t = q[i] / p[i];
+        if (p[i] < 0.0)
+            t0 = t > t0 ? t : t0;
+        else
+            t1 = t < t1 ? t : t1;
+        if (t0 > t1)
+            return 0;
+    }
+    return 1;
+}
+
 static wm_status bin_items(work *w)
 {
     const wm_scene *s = w->s;
@@ -190,6 +227,9 @@ static wm_status bin_items(work *w)
                 for (int32_t tx = tx0; tx <= tx1; tx++)
                 {
                     const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+                    if (!seg_reaches_tile(w, tx, ty, g->ax, g->ay, g->bx,
+                                          g->by, grow))
+                        continue;
                     if (pass == 0)
                         cs[t]++;
                     else
@@ -214,6 +254,9 @@ static wm_status bin_items(work *w)
                     {
                         const size_t t =
                             (size_t)ty * (size_t)f->ntx + (size_t)tx;
+                        if (!seg_reaches_tile(w, tx, ty, g->ax, g->ay, g->bx,
+                                              g->by, band))
+                            continue;
                         if (pass == 0)
                             ce[t]++;
                         else
