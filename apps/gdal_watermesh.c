@@ -101,37 +101,89 @@ static OGRLayerH make_layer(GDALDatasetH ds, const char *name,
     return l;
 }
 
-static int move_into_place(const char *tmpdir, const char *dstdir,
-                           int overwrite)
+/* Moves every entry of folder `from` into folder `to`: files replace files
+ * of the same name (rename() does that atomically), folders are merged
+ * entry by entry, so an existing destination folder loses only what this
+ * run rewrites. An entry that exists without `overwrite` is an error. */
+static int move_into_place(const char *from, const char *to, int overwrite)
 {
-    char **entries = VSIReadDir(tmpdir);
+    char **entries = VSIReadDir(from);
     int ok = TRUE;
     for (char **e = entries; ok && e && *e; e++)
     {
         if (!strcmp(*e, ".") || !strcmp(*e, ".."))
             continue;
-        char *fromc = CPLStrdup(CPLFormFilename(tmpdir, *e, NULL));
-        char *to = CPLStrdup(CPLFormFilename(dstdir, *e, NULL));
-        VSIStatBufL st;
-        if (VSIStatL(to, &st) == 0)
-        {
-            if (!overwrite)
-                ok = FALSE;
-            else if (VSI_ISDIR(st.st_mode))
-                VSIRmdirRecursive(to);
-            else
-                VSIUnlink(to);
-        }
-        if (ok && VSIRename(fromc, to) != 0)
+        char *src = CPLStrdup(CPLFormFilename(from, *e, NULL));
+        char *dst = CPLStrdup(CPLFormFilename(to, *e, NULL));
+        VSIStatBufL ss, ds;
+        const int src_dir = VSIStatL(src, &ss) == 0 && VSI_ISDIR(ss.st_mode);
+        const int exists = VSIStatL(dst, &ds) == 0;
+        if (exists && !overwrite)
         {
             CPLError(CE_Failure, CPLE_FileIO,
-                     "gdal_watermesh: cannot move %s to %s.", fromc, to);
+                     "gdal_watermesh: %s already exists; use -overwrite.",
+                     dst);
             ok = FALSE;
         }
-        CPLFree(fromc);
-        CPLFree(to);
+        else if (exists && src_dir && VSI_ISDIR(ds.st_mode))
+            ok = move_into_place(src, dst, overwrite);
+        else if (exists && src_dir != (VSI_ISDIR(ds.st_mode) != 0))
+        {
+            CPLError(CE_Failure, CPLE_FileIO,
+                     "gdal_watermesh: cannot replace %s: one of the old and "
+                     "the new is a folder, the other a file.",
+                     dst);
+            ok = FALSE;
+        }
+        else if (VSIRename(src, dst) != 0)
+        {
+            CPLError(CE_Failure, CPLE_FileIO,
+                     "gdal_watermesh: cannot move %s to %s.", src, dst);
+            ok = FALSE;
+        }
+        CPLFree(src);
+        CPLFree(dst);
     }
     CSLDestroy(entries);
+    return ok;
+}
+
+/* Writes the scene into a new dataset at `path`; FALSE after a CPLError. */
+static int write_output(const WMScene *scene, GDALDriverH drv,
+                        const char *path, char **lco, char **dsco,
+                        int show_progress)
+{
+    GDALDatasetH out = GDALCreate(drv, path, 0, 0, 0, GDT_Unknown, dsco);
+    if (!out)
+        return FALSE;
+    OGRLayerH lw = make_layer(out, "water", wkbPolygon, scene->hSRS, lco,
+                              "area", OFTReal);
+    OGRLayerH lm = lw ? make_layer(out, "mesh", wkbMultiPolygon, scene->hSRS,
+                                   lco, "triangles", OFTInteger)
+                      : NULL;
+    int ok = lw && lm;
+    if (!ok)
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "gdal_watermesh: cannot create the output layers in %s.",
+                 path);
+    if (ok)
+    {
+        /* one transaction when the format has them: fast GeoPackage
+         * writes. On failure the whole temporary folder is discarded, so
+         * there is nothing to roll back. */
+        const int tx = GDALDatasetStartTransaction(out, FALSE) == OGRERR_NONE;
+        ok = WMSceneGenerate(scene, lw, lm, progress,
+                             show_progress ? (void *)1 : NULL) == CE_None &&
+             !g_interrupted;
+        if (ok && tx)
+            ok = GDALDatasetCommitTransaction(out) == OGRERR_NONE;
+    }
+    if (!ok)
+        CPLPushErrorHandler(CPLQuietErrorHandler); /* closing a discarded
+                                                      output */
+    GDALClose(out);
+    if (!ok)
+        CPLPopErrorHandler();
     return ok;
 }
 
@@ -242,13 +294,6 @@ int main(int argc, char **argv)
     if (stats)
         all = CSLSetNameValue(all, "STATS", "YES");
 
-    {
-        WMParams params;
-        if (!WMParamsParse(all, &params))
-            goto end;
-        WMParamsFree(&params);
-    }
-
     VSIStatBufL sb;
     if (VSIStatL(dst, &sb) == 0 && !overwrite)
     {
@@ -267,15 +312,14 @@ int main(int argc, char **argv)
         goto end;
     }
 
+    /* read and check every input before anything is created */
     WMSources src;
     if (!WMSourcesOpen(all, &src))
         goto end;
-    OGRSpatialReferenceH srs = WMGetWorkingSRS(src.hRivers, src.hLakes, all);
-    if (!srs)
-    {
-        WMSourcesClose(&src);
+    WMScene *scene = WMSceneBuild(src.hRivers, src.hLakes, all);
+    WMSourcesClose(&src);
+    if (!scene)
         goto end;
-    }
 
     char *dstdir = CPLStrdup(CPLGetPath(dst));
     if (!*dstdir)
@@ -296,55 +340,19 @@ int main(int argc, char **argv)
         signal(SIGTERM, on_signal);
         char *tmpdst =
             CPLStrdup(CPLFormFilename(tmpdir, CPLGetFilename(dst), NULL));
-        GDALDatasetH out = GDALCreate(drv, tmpdst, 0, 0, 0, GDT_Unknown, dsco);
+        ok = write_output(scene, drv, tmpdst, lco, dsco,
+                          show_progress && !quiet);
         CPLFree(tmpdst);
-        ok = out != NULL;
-        OGRLayerH lw = NULL, lm = NULL;
-        if (ok)
-        {
-            lw = make_layer(out, "water", wkbPolygon, srs, lco, "area",
-                            OFTReal);
-            lm = lw ? make_layer(out, "mesh", wkbMultiPolygon, srs, lco,
-                                 "triangles", OFTInteger)
-                    : NULL;
-            ok = lw && lm;
-            if (!ok)
-                CPLError(CE_Failure, CPLE_AppDefined,
-                         "gdal_watermesh: cannot create the output layers "
-                         "in %s.",
-                         dst);
-        }
-        if (ok)
-        {
-            const int tx = GDALDatasetStartTransaction(out, FALSE) ==
-                           OGRERR_NONE;
-            ok = WMGenerate(src.hRivers, src.hLakes, lw, lm, all, progress,
-                            show_progress && !quiet ? (void *)1 : NULL) ==
-                 CE_None;
-            if (tx)
-            {
-                if (ok)
-                    ok = GDALDatasetCommitTransaction(out) == OGRERR_NONE;
-                else
-                    GDALDatasetRollbackTransaction(out);
-            }
-        }
-        if (out)
-            GDALClose(out);
-        if (ok && g_interrupted)
-            ok = FALSE;
         if (ok)
             ok = move_into_place(tmpdir, dstdir, overwrite);
         VSIRmdirRecursive(tmpdir);
     }
     CPLFree(tmpdir);
     CPLFree(dstdir);
-    OSRRelease(srs);
-    WMSourcesClose(&src);
+    WMSceneFree(scene);
     rc = ok ? 0 : 1;
     if (!ok && g_interrupted)
         fprintf(stderr, "ERROR: interrupted; nothing written to %s.\n", dst);
-    (void)quiet;
 end:
     CSLDestroy(all);
     CSLDestroy(opts);

@@ -4,7 +4,7 @@ problem) and odd-but-valid inputs (handled: no crash, valid output)."""
 import os
 
 import pytest
-from osgeo import gdal
+from osgeo import gdal, ogr
 
 import oracle
 import scenes
@@ -249,3 +249,22 @@ def test_non_metric_crs_refused(wm, tmp_dir):
     p = scenes.make_bad_scene(os.path.join(tmp_dir, 'feet_rivers.shp'), 'no_crs')
     assert_refused(wm, {'RIVERS': p, 'TARGET_SRS': 'EPSG:2263'},
                    all_of=['metres', 'TARGET_SRS'])
+
+
+def test_absurd_width_refused(wm, simple_options):
+    assert_refused(wm, dict(simple_options, WIDTH='1e18'), all_of=['WIDTH'])
+
+
+def test_absurd_width_field_value_falls_back(wm, tmp_dir):
+    # a width of 1e7 m in the data is a data error: WIDTH is used instead,
+    # counted in the warning
+    p = os.path.join(tmp_dir, 'wide.gpkg')
+    o = scenes.xy(0, 0)
+    scenes.write_layer(p, 'rivers', ogr.wkbLineString, scenes.SCENE_EPSG,
+                       [{'width': 1e7, 'geom': 'LINESTRING (%f %f, %f %f)' % (o[0], o[1], o[0] + 100, o[1])}],
+                       fields=[('width', 'Real')])
+    res = wm.run({'RIVERS': p, 'WIDTH_FIELD': 'width', 'WIDTH': 10, 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512})
+    assert res.water
+    a = oracle.total_area(res.water)
+    assert abs(a - (100 * 10 + 3.14159 * 25)) < 0.03 * a, a
+    assert "1 feature" in res.cap.text, res.cap.text

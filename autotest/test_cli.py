@@ -226,3 +226,34 @@ def test_all_options_match_open_options(wm, simple_scene, tmp_dir):
     ref = wm.run(o)
     assert wm.signature(out['water']) == wm.signature(ref.water)
     assert wm.signature(out['mesh']) == wm.signature(ref.mesh)
+
+
+def test_overwrite_directory_keeps_other_files(wm, simple_options, simple_args, tmp_dir):
+    # -overwrite replaces what the run writes, never the rest of a folder
+    dst = os.path.join(tmp_dir, 'shpdir')
+    ok(wm.cli(simple_args + ['-of', 'ESRI Shapefile', dst]))
+    keep = os.path.join(dst, 'keep.txt')
+    with open(keep, 'w') as f:
+        f.write('not ours')
+    ok(wm.cli(simple_args + ['-of', 'ESRI Shapefile', '-overwrite', '-width', '14', dst]))
+    assert open(keep).read() == 'not ours'
+    ds = gdal.OpenEx(dst, gdal.OF_VECTOR)
+    water = wm.read_layer(ds.GetLayerByName('water'))
+    ref = wm.run(dict(simple_options, WIDTH=14))
+    a, b = oracle.total_area(water), oracle.total_area(ref.water)
+    assert abs(a - b) <= 1e-9 * b, (a, b)
+
+
+def test_failed_run_reports_only_its_error(wm, simple_args, tmp_dir):
+    dst = os.path.join(tmp_dir, 'out.gpkg')
+    p = failed(wm.cli(simple_args + ['-width_field', 'nosuch', dst]))
+    assert 'nosuch' in p.stderr
+    assert 'no such table' not in p.stderr, p.stderr
+    assert p.stderr.count('ERROR') == 1, p.stderr
+
+
+def test_huge_spat_is_everything(wm, simple_options, simple_args, tmp_dir):
+    dst = os.path.join(tmp_dir, 'out.gpkg')
+    ok(wm.cli(simple_args + ['-spat', '-1e30', '-1e30', '1e30', '1e30', dst]))
+    got = wm.read_output(dst)
+    assert len(got['water']) == len(wm.run(simple_options).water)

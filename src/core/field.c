@@ -27,7 +27,8 @@
  * the input, never on the window or tile that computed it.
  *
  * Cost: O(samples in mixed tiles x items in reach + rows x polygon edges
- * spanning them). Memory: (WM_TILE+1)^2 floats per mixed tile.
+ * spanning them). Memory: (WM_TILE+1)^2 floats per mixed tile, plus crossing
+ * lists over each polygon's own rows (its box), never polygons x rows.
  */
 #include "field.h"
 
@@ -119,7 +120,15 @@ typedef struct
     size_t *tedge_start;
     uint32_t *tedge;      /* global edge index */
     uint32_t *tedge_poly; /* local polygon index */
-    /* crossings: key = k * h + r */
+    /* polygon rows: polygon k spans window rows row0[k] .. row0[k] +
+     * nrows[k] - 1 (its box), whose crossing lists have keys
+     * key0[k] .. key0[k] + nrows[k] - 1; memory grows with the polygons'
+     * heights, not with polygons x window rows */
+    int32_t *row0, *nrows;
+    size_t *key0;
+    /* polygons whose box touches each tile (CSR over tiles) */
+    size_t *tpoly_start;
+    uint32_t *tpoly;
     uint8_t *base;
     size_t *tog_start;
     int32_t *tog;
@@ -276,13 +285,78 @@ static wm_status bin_items(work *w)
     return WM_OK;
 }
 
+/* Polygons whose box touches each tile: the candidates of the one inside
+ * test that makes a tile without edges in reach uniform water. */
+static wm_status bin_polys(work *w)
+{
+    const wm_field *f = w->f;
+    const size_t nt = (size_t)f->ntx * (size_t)f->nty;
+    size_t *cur = NULL;
+    w->tpoly_start = calloc(nt + 1, sizeof *w->tpoly_start);
+    if (!w->tpoly_start)
+        return WM_ERR_NOMEM;
+    for (int pass = 0; pass < 2; pass++)
+    {
+        for (size_t k = 0; k < w->npolys; k++)
+        {
+            const wm_box b = w->s->poly_box[w->polys[k]];
+            int32_t tx0, tx1, ty0, ty1;
+            tile_span(b.x0, b.x1, w->X0, w->tsq, f->ntx, &tx0, &tx1);
+            tile_span(b.y0, b.y1, w->Y0, w->tsq, f->nty, &ty0, &ty1);
+            for (int32_t ty = ty0; ty <= ty1; ty++)
+                for (int32_t tx = tx0; tx <= tx1; tx++)
+                {
+                    const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+                    if (pass == 0)
+                        w->tpoly_start[t + 1]++;
+                    else
+                        w->tpoly[cur[t]++] = (uint32_t)k;
+                }
+        }
+        if (pass == 0)
+        {
+            for (size_t t = 0; t < nt; t++)
+                w->tpoly_start[t + 1] += w->tpoly_start[t];
+            w->tpoly = malloc((w->tpoly_start[nt] + 1) * sizeof *w->tpoly);
+            cur = malloc((nt + 1) * sizeof *cur);
+            if (!w->tpoly || !cur)
+            {
+                free(cur);
+                return WM_ERR_NOMEM;
+            }
+            memcpy(cur, w->tpoly_start, nt * sizeof *cur);
+        }
+    }
+    free(cur);
+    return WM_OK;
+}
+
 /* Row crossings of every gathered polygon: base parity (crossings left of
  * column 0) and sorted toggle columns in 1 .. w-1. */
 static wm_status build_crossings(work *w)
 {
     const wm_scene *s = w->s;
     const wm_field *f = w->f;
-    const size_t nkeys = w->npolys * (size_t)f->h;
+    w->row0 = malloc((w->npolys + 1) * sizeof *w->row0);
+    w->nrows = malloc((w->npolys + 1) * sizeof *w->nrows);
+    w->key0 = malloc((w->npolys + 1) * sizeof *w->key0);
+    if (!w->row0 || !w->nrows || !w->key0)
+        return WM_ERR_NOMEM;
+    size_t nkeys = 0;
+    for (size_t k = 0; k < w->npolys; k++)
+    {
+        const wm_box b = s->poly_box[w->polys[k]];
+        int64_t r0 = -floordiv(-b.y0, WM_Q) - f->gy0;
+        int64_t r1 = floordiv(b.y1, WM_Q) - f->gy0;
+        if (r0 < 0)
+            r0 = 0;
+        if (r1 > f->h - 1)
+            r1 = f->h - 1;
+        w->row0[k] = (int32_t)r0;
+        w->nrows[k] = r1 >= r0 ? (int32_t)(r1 - r0 + 1) : 0;
+        w->key0[k] = nkeys;
+        nkeys += (size_t)w->nrows[k];
+    }
     w->base = calloc(nkeys + 1, 1);
     w->tog_start = calloc(nkeys + 1, sizeof(size_t));
     if (!w->base || !w->tog_start)
@@ -334,7 +408,7 @@ static wm_status build_crossings(work *w)
                                         (wm_i128)(Y - ya) * (xb - xa);
                     const int64_t c =
                         floordiv128(num, (wm_i128)dy * WM_Q) + 1;
-                    const size_t key = k * (size_t)f->h + (size_t)r;
+                    const size_t key = w->key0[k] + (size_t)(r - w->row0[k]);
                     if (c <= 0)
                     {
                         if (pass == 0)
@@ -361,10 +435,21 @@ static wm_status build_crossings(work *w)
     return WM_OK;
 }
 
+/* Crossing-list key of polygon k on window row r, or SIZE_MAX when the
+ * row is outside the polygon's box (no crossing, parity 0). */
+static size_t row_key(const work *w, size_t k, int32_t r)
+{
+    if (r < w->row0[k] || r >= w->row0[k] + w->nrows[k])
+        return SIZE_MAX;
+    return w->key0[k] + (size_t)(r - w->row0[k]);
+}
+
 /* Even-odd parity of local polygon k at window sample (c, r). */
 static int inside_at(const work *w, size_t k, int32_t c, int32_t r)
 {
-    const size_t key = k * (size_t)w->f->h + (size_t)r;
+    const size_t key = row_key(w, k, r);
+    if (key == SIZE_MAX)
+        return 0;
     int in = w->base[key];
     for (size_t i = w->tog_start[key]; i < w->tog_start[key + 1]; i++)
         if (w->tog[i] <= c)
@@ -455,8 +540,10 @@ static wm_status compute_tile(work *w, int32_t tx, int32_t ty,
         haspoly[w->tedge_poly[i]] = 1;
     int water = 0;
     const int64_t X = w->X0 + (int64_t)c0 * WM_Q, Y = w->Y0 + (int64_t)r0 * WM_Q;
-    for (size_t k = 0; k < w->npolys && !water; k++)
+    for (size_t i = w->tpoly_start[t]; i < w->tpoly_start[t + 1] && !water;
+         i++)
     {
+        const size_t k = w->tpoly[i];
         const wm_box b = s->poly_box[w->polys[k]];
         if (!haspoly[k] && X >= b.x0 && X <= b.x1 && Y >= b.y0 &&
             Y <= b.y1 && inside_at(w, k, c0, r0))
@@ -485,9 +572,10 @@ static wm_status compute_tile(work *w, int32_t tx, int32_t ty,
             edge_min2(&s->edges[w->tedge[i]], X, Y, du2, d2);
         for (int32_t j = 0; j < ny; j++)
         {
-            const size_t key = k * (size_t)f->h + (size_t)(r0 + j);
-            int in = w->base[key];
-            size_t ti = w->tog_start[key], te = w->tog_start[key + 1];
+            const size_t key = row_key(w, k, r0 + j);
+            int in = key == SIZE_MAX ? 0 : w->base[key];
+            size_t ti = key == SIZE_MAX ? 0 : w->tog_start[key];
+            const size_t te = key == SIZE_MAX ? 0 : w->tog_start[key + 1];
             for (int32_t q = 0; q < nx; q++)
             {
                 while (ti < te && w->tog[ti] <= c0 + q)
@@ -583,7 +671,8 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
         }
     }
     haspoly = calloc(wk.npolys + 1, 1);
-    if (!haspoly || bin_items(&wk) != WM_OK || build_crossings(&wk) != WM_OK)
+    if (!haspoly || bin_items(&wk) != WM_OK || bin_polys(&wk) != WM_OK ||
+        build_crossings(&wk) != WM_OK)
         goto nomem;
     for (int32_t ty = 0; ty < f->nty; ty++)
         for (int32_t tx = 0; tx < f->ntx; tx++)
@@ -602,6 +691,11 @@ cleanup:
     free(wk.tedge_start);
     free(wk.tedge);
     free(wk.tedge_poly);
+    free(wk.row0);
+    free(wk.nrows);
+    free(wk.key0);
+    free(wk.tpoly_start);
+    free(wk.tpoly);
     free(wk.base);
     free(wk.tog_start);
     free(wk.tog);

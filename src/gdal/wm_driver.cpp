@@ -17,6 +17,7 @@
 
 #include <algorithm>
 #include <climits>
+#include <cctype>
 #include <cstring>
 #include <cmath>
 #include <map>
@@ -178,14 +179,20 @@ struct CacheSink
 static int cache_sink(void *user, wm_block_result *res)
 {
     auto *s = static_cast<CacheSink *>(user);
+    wm_block_result *copy = nullptr;
     try
     {
-        ResultPtr p(new wm_block_result(*res), ResultDeleter());
-        (*s->cache)[{res->bx, res->by}] = p;
+        copy = new wm_block_result(*res);
+        memset(res, 0, sizeof *res); /* ownership moved to copy */
+        ResultPtr p(copy, ResultDeleter()); /* deletes copy if it throws */
+        copy = nullptr;
+        (*s->cache)[{p->bx, p->by}] = p;
         return TRUE;
     }
     catch (const std::exception &)
     {
+        if (copy)
+            ResultDeleter()(copy);
         wm_block_result_free(res);
         CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
         return FALSE;
@@ -403,9 +410,23 @@ int WaterMeshDataset::Identify(GDALOpenInfo *poOpenInfo)
         return TRUE;
     if (EQUAL(CPLGetExtension(poOpenInfo->pszFilename), "watermesh"))
         return TRUE;
-    return poOpenInfo->pabyHeader != nullptr &&
-           strstr(reinterpret_cast<const char *>(poOpenInfo->pabyHeader),
-                  "<WaterMesh") != nullptr;
+    /* an XML file whose root element is <WaterMesh> (after an optional
+     * XML declaration) */
+    if (poOpenInfo->pabyHeader == nullptr)
+        return FALSE;
+    const char *h = reinterpret_cast<const char *>(poOpenInfo->pabyHeader);
+    while (isspace(static_cast<unsigned char>(*h)))
+        h++;
+    if (STARTS_WITH(h, "<?xml"))
+    {
+        h = strstr(h, "?>");
+        if (!h)
+            return FALSE;
+        h += 2;
+        while (isspace(static_cast<unsigned char>(*h)))
+            h++;
+    }
+    return STARTS_WITH(h, "<WaterMesh");
 }
 
 GDALDataset *WaterMeshDataset::Open(GDALOpenInfo *poOpenInfo)

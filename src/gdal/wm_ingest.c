@@ -207,14 +207,13 @@ static int read_points(builder *b, OGRGeometryH g, const feat_ctx *fc)
     b->npts = 0;
     if (!reserve((void **)&b->px, &b->pts_cap, (size_t)n + 1, sizeof(int64_t)))
         return FALSE;
-    size_t cap2 = b->pts_cap;
-    (void)cap2;
-    b->py = VSIRealloc(b->py, b->pts_cap * sizeof(int64_t));
-    if (!b->py)
+    int64_t *py = VSIRealloc(b->py, b->pts_cap * sizeof(int64_t));
+    if (!py)
     {
         CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
         return FALSE;
     }
+    b->py = py;
     for (int i = 0; i < n; i++)
     {
         double x = OGR_G_GetX(g, i), y = OGR_G_GetY(g, i);
@@ -348,10 +347,12 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
                 if (ft == OFTReal || ft == OFTInteger || ft == OFTInteger64)
                 {
                     v = OGR_F_GetFieldAsDouble(f, wfield);
-                    good = isfinite(v) && v > 0;
+                    good = isfinite(v) && v > 0 && v <= WM_MAX_WIDTH;
                 }
                 else
-                    good = parse_width(OGR_F_GetFieldAsString(f, wfield), &v);
+                    good = parse_width(OGR_F_GetFieldAsString(f, wfield),
+                                       &v) &&
+                           v <= WM_MAX_WIDTH;
             }
             if (good)
                 w = v;
@@ -422,7 +423,8 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
     if (ok && badw)
         CPLError(CE_Warning, CPLE_AppDefined,
                  "WATERMESH: RIVERS layer '%s': %lu feature(s) with a NULL, "
-                 "empty, unparsable or non-positive '%s' use WIDTH=%g.",
+                 "empty, unparsable, non-positive or absurd (> 100 km) '%s' "
+                 "use WIDTH=%g.",
                  OGR_L_GetName(h), (unsigned long)badw, p->width_field,
                  p->width);
     return ok;
@@ -631,15 +633,21 @@ int WMSceneBlocks(const WMScene *s, const double *spat, int64_t **blocks,
             y1 = c->by0 + c->nby - 1;
     if (spat)
     {
+        /* clamp in double first: a huge filter must not overflow int64 */
         const double bs = s->params.block;
-        const int64_t fx0 = (int64_t)floor(spat[0] / bs),
-                      fy0 = (int64_t)floor(spat[1] / bs);
-        const int64_t fx1 = (int64_t)floor(spat[2] / bs),
-                      fy1 = (int64_t)floor(spat[3] / bs);
-        if (fx0 > x0) x0 = fx0;
-        if (fy0 > y0) y0 = fy0;
-        if (fx1 < x1) x1 = fx1;
-        if (fy1 < y1) y1 = fy1;
+        const double lo[2] = {(double)x0, (double)y0};
+        const double hi[2] = {(double)x1, (double)y1};
+        double f[4];
+        for (int i = 0; i < 4; i++)
+        {
+            const double v = floor(spat[i] / bs);
+            f[i] = v < lo[i & 1] - 1 ? lo[i & 1] - 1
+                                     : (v > hi[i & 1] + 1 ? hi[i & 1] + 1 : v);
+        }
+        if ((int64_t)f[0] > x0) x0 = (int64_t)f[0];
+        if ((int64_t)f[1] > y0) y0 = (int64_t)f[1];
+        if ((int64_t)f[2] < x1) x1 = (int64_t)f[2];
+        if ((int64_t)f[3] < y1) y1 = (int64_t)f[3];
     }
     *blocks = NULL;
     *nblocks = 0;

@@ -44,17 +44,28 @@ static int number(CSLConstList opts, const char *name, double def, double *out)
     return TRUE;
 }
 
+static int params_parse(CSLConstList opts, WMParams *p);
+
 int WMParamsParse(CSLConstList opts, WMParams *p)
 {
     memset(p, 0, sizeof *p);
+    if (params_parse(opts, p))
+        return TRUE;
+    WMParamsFree(p);
+    return FALSE;
+}
+
+static int params_parse(CSLConstList opts, WMParams *p)
+{
     if (!number(opts, "WIDTH", 10.0, &p->width) ||
         !number(opts, "PIXEL_SIZE", 0.5, &p->pixel) ||
         !number(opts, "BLOCK_SIZE", 4096.0, &p->block))
         return FALSE;
-    if (!(p->width > 0))
+    if (!(p->width > 0) || p->width > WM_MAX_WIDTH)
     {
         CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: WIDTH=%g must be positive.", p->width);
+                 "WATERMESH: WIDTH=%g must be positive and at most %g m.",
+                 p->width, WM_MAX_WIDTH);
         return FALSE;
     }
     if (!(p->pixel > 0))
@@ -290,6 +301,7 @@ char **WMReadDescriptor(const char *pszPath)
         return NULL;
     }
     char *dir = CPLStrdup(CPLGetPath(pszPath));
+    int bad = FALSE;
     for (CPLXMLNode *n = wm->psChild; n; n = n->psNext)
     {
         if (n->eType != CXT_Element)
@@ -302,13 +314,17 @@ char **WMReadDescriptor(const char *pszPath)
             CPLError(CE_Failure, CPLE_AppDefined,
                      "WATERMESH: '%s': unknown element <%s>.", pszPath,
                      n->pszValue);
-            CSLDestroy(opts);
-            opts = NULL;
+            bad = TRUE;
             break;
         }
         const char *v = CPLGetXMLValue(n, NULL, "");
+        VSIStatBufL sb;
+        /* a relative datasource path resolves against the descriptor's
+         * folder when it names something there (a connection string such
+         * as PG:... is left alone) */
         if ((EQUAL(n->pszValue, "RIVERS") || EQUAL(n->pszValue, "LAKES")) &&
-            *v && CPLIsFilenameRelative(v) && *dir)
+            *v && CPLIsFilenameRelative(v) && *dir &&
+            VSIStatL(CPLFormFilename(dir, v, NULL), &sb) == 0)
             opts = CSLSetNameValue(opts, n->pszValue,
                                    CPLFormFilename(dir, v, NULL));
         else
@@ -316,12 +332,13 @@ char **WMReadDescriptor(const char *pszPath)
     }
     CPLFree(dir);
     CPLDestroyXMLNode(root);
-    if (!opts)
+    if (bad)
     {
-        if (CPLGetLastErrorType() != CE_Failure)
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "WATERMESH: '%s' sets no option.", pszPath);
+        CSLDestroy(opts);
         return NULL;
     }
+    if (!opts)
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: '%s' sets no option.", pszPath);
     return opts;
 }

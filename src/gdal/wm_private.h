@@ -13,6 +13,10 @@
 
 CPL_C_START
 
+/** Widest river accepted, metres: wider values are data errors (and would
+ *  make a single river reach thousands of blocks). */
+#define WM_MAX_WIDTH 100000.0
+
 /** Every option name, in documentation order (NULL-terminated). */
 extern const char *const WM_OPTION_NAMES[];
 
@@ -103,6 +107,12 @@ OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
                             size_t p);
 /** Polygon area in m^2 (exact lattice area, then scaled). */
 double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p);
+
+/** Runs every block of a built scene (those touching SPAT, if set) and
+ *  writes the features to hWater / hMesh (either may be NULL); prints the
+ *  stage table when STATS was set. WMGenerate is WMSceneBuild + this. */
+CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
+                       GDALProgressFunc pfn, void *pArg);
 
 /** Prints the per-stage table and the vertex ratio to stdout. */
 void WMPrintStats(const WMScene *s, const WMRunStats *st);

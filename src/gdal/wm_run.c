@@ -324,13 +324,9 @@ static int write_block(void *user, wm_block_result *res)
     return ok;
 }
 
-CPLErr WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes, OGRLayerH hWater,
-                  OGRLayerH hMesh, CSLConstList papszOptions,
-                  GDALProgressFunc pfnProgress, void *pProgressArg)
+CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
+                       GDALProgressFunc pfn, void *pArg)
 {
-    WMScene *s = WMSceneBuild(hRivers, hLakes, papszOptions);
-    if (!s)
-        return CE_Failure;
     int64_t *blocks = NULL;
     size_t nblocks = 0;
     CPLErr err = CE_Failure;
@@ -339,12 +335,24 @@ CPLErr WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes, OGRLayerH hWater,
     {
         gen_sink g = {s, hWater, hMesh};
         WMRunStats st;
-        err = WMRunBlocks(s, blocks, nblocks, write_block, &g, pfnProgress,
-                          pProgressArg, &st);
+        err = WMRunBlocks(s, blocks, nblocks, write_block, &g, pfn, pArg,
+                          &st);
         if (err == CE_None && s->params.stats)
             WMPrintStats(s, &st);
     }
     VSIFree(blocks);
+    return err;
+}
+
+CPLErr WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes, OGRLayerH hWater,
+                  OGRLayerH hMesh, CSLConstList papszOptions,
+                  GDALProgressFunc pfnProgress, void *pProgressArg)
+{
+    WMScene *s = WMSceneBuild(hRivers, hLakes, papszOptions);
+    if (!s)
+        return CE_Failure;
+    const CPLErr err =
+        WMSceneGenerate(s, hWater, hMesh, pfnProgress, pProgressArg);
     WMSceneFree(s);
     return err;
 }
