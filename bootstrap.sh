@@ -4,7 +4,7 @@
 # out/andorra.gpkg with a picture of the mesh in out/andorra.png.
 set -eu
 cd "$(dirname "$0")"
-PKGS="build-essential autoconf automake libtool pkg-config libgdal-dev gdal-bin
+PKGS="build-essential autoconf automake libtool pkg-config clang-format libgdal-dev gdal-bin
 python3-gdal python3-pytest python3-shapely python3-numpy python3-matplotlib"
 missing=""
 for p in $PKGS; do

@@ -25,21 +25,23 @@
 static void usage(int code)
 {
     FILE *f = code ? stderr : stdout;
-    fprintf(f,
-            "Usage: gdal_watermesh [--help] [--version] [--help-general]\n"
-            "       [-rivers <ds>] [-rivers_layer <name>] [-rivers_where <expr>]\n"
-            "       [-lakes <ds>] [-lakes_layer <name>] [-lakes_where <expr>]\n"
-            "       [-width <m>] [-width_field <field>] [-pixel_size <m>]\n"
-            "       [-block_size <m>] [-simplify <m>] [-method CONTOUR]\n"
-            "       [-device AUTO|CPU|OPENCL] [-num_threads <n>|ALL_CPUS]\n"
-            "       [-target_srs <srs>] [-spat <xmin> <ymin> <xmax> <ymax>]\n"
-            "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco <NAME>=<VALUE>]...\n"
-            "       [-overwrite] [-progress|-q] [-stats]\n"
-            "       [<scene.watermesh>] <dst_datasource>\n"
-            "\n"
-            "Writes layers 'water' (dissolved polygons per block) and 'mesh'\n"
-            "(constrained Delaunay triangles per polygon) to <dst_datasource>\n"
-            "(default format GPKG, or guessed from the extension).\n");
+    fprintf(
+        f,
+        "Usage: gdal_watermesh [--help] [--version] [--help-general]\n"
+        "       [-rivers <ds>] [-rivers_layer <name>] [-rivers_where <expr>]\n"
+        "       [-lakes <ds>] [-lakes_layer <name>] [-lakes_where <expr>]\n"
+        "       [-width <m>] [-width_field <field>] [-pixel_size <m>]\n"
+        "       [-block_size <m>] [-simplify <m>] [-method CONTOUR]\n"
+        "       [-device AUTO|CPU|OPENCL] [-num_threads <n>|ALL_CPUS]\n"
+        "       [-target_srs <srs>] [-spat <xmin> <ymin> <xmax> <ymax>]\n"
+        "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco "
+        "<NAME>=<VALUE>]...\n"
+        "       [-overwrite] [-progress|-q] [-stats]\n"
+        "       [<scene.watermesh>] <dst_datasource>\n"
+        "\n"
+        "Writes layers 'water' (dissolved polygons per block) and 'mesh'\n"
+        "(constrained Delaunay triangles per polygon) to <dst_datasource>\n"
+        "(default format GPKG, or guessed from the extension).\n");
     exit(code);
 }
 
@@ -121,8 +123,7 @@ static int move_into_place(const char *from, const char *to, int overwrite)
         if (exists && !overwrite)
         {
             CPLError(CE_Failure, CPLE_FileIO,
-                     "gdal_watermesh: %s already exists; use -overwrite.",
-                     dst);
+                     "gdal_watermesh: %s already exists; use -overwrite.", dst);
             ok = FALSE;
         }
         else if (exists && src_dir && VSI_ISDIR(ds.st_mode))
@@ -149,15 +150,14 @@ static int move_into_place(const char *from, const char *to, int overwrite)
 }
 
 /* Writes the scene into a new dataset at `path`; FALSE after a CPLError. */
-static int write_output(const WMScene *scene, GDALDriverH drv,
-                        const char *path, char **lco, char **dsco,
-                        int show_progress)
+static int write_output(const WMScene *scene, GDALDriverH drv, const char *path,
+                        char **lco, char **dsco, int show_progress)
 {
     GDALDatasetH out = GDALCreate(drv, path, 0, 0, 0, GDT_Unknown, dsco);
     if (!out)
         return FALSE;
-    OGRLayerH lw = make_layer(out, "water", wkbPolygon, scene->hSRS, lco,
-                              "area", OFTReal);
+    OGRLayerH lw =
+        make_layer(out, "water", wkbPolygon, scene->hSRS, lco, "area", OFTReal);
     OGRLayerH lm = lw ? make_layer(out, "mesh", wkbMultiPolygon, scene->hSRS,
                                    lco, "triangles", OFTInteger)
                       : NULL;
@@ -233,9 +233,9 @@ int main(int argc, char **argv)
                 fprintf(stderr, "ERROR: -spat needs 4 values.\n");
                 usage(1);
             }
-            char *v = CPLStrdup(CPLSPrintf("%s,%s,%s,%s", argv[i + 1],
-                                           argv[i + 2], argv[i + 3],
-                                           argv[i + 4]));
+            char *v =
+                CPLStrdup(CPLSPrintf("%s,%s,%s,%s", argv[i + 1], argv[i + 2],
+                                     argv[i + 3], argv[i + 4]));
             opts = CSLSetNameValue(opts, "SPAT", v);
             CPLFree(v);
             i += 4;

@@ -70,8 +70,8 @@ int main(int argc, char **argv)
     OGR_L_CreateField(w, fd, TRUE);
     OGR_Fld_Destroy(fd);
 
-    const CPLErr err = WMGenerate(r, l, w, m, opts, progress,
-                                  cancel ? (void *)1 : NULL);
+    const CPLErr err =
+        WMGenerate(r, l, w, m, opts, progress, cancel ? (void *)1 : NULL);
     int rc = 0;
     if (err != CE_None)
         rc = CPLGetLastErrorNo() == CPLE_UserInterrupt ? 2 : 1;

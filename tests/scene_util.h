@@ -25,7 +25,7 @@ static inline void su_river(wm_scene *s, const double *xy, int npts, double r)
 /* Adds a lake polygon made of nrings rings (pixels), ring k having
  * counts[k] points, all concatenated in xy. */
 static inline void su_lake(wm_scene *s, const double *xy, const int *counts,
-                    int nrings)
+                           int nrings)
 {
     size_t total = 0;
     for (int k = 0; k < nrings; k++)

@@ -251,18 +251,15 @@ static double check(const char *name, const wm_rings *r)
         return dt;
     }
     const verdict vd = verify(r, tris, nt);
-    TAP_EQ(vd.bad_count, 0, "%s: %zu triangles, as the formula says", name,
-           nt);
+    TAP_EQ(vd.bad_count, 0, "%s: %zu triangles, as the formula says", name, nt);
     TAP_EQ(vd.bad_ccw, 0, "%s: every triangle counter-clockwise", name);
     TAP_EQ(vd.bad_area, 0, "%s: triangle area == polygon area", name);
-    TAP_EQ(vd.missing_ring, 0, "%s: every ring edge is a triangle edge",
-           name);
+    TAP_EQ(vd.missing_ring, 0, "%s: every ring edge is a triangle edge", name);
     TAP_EQ(vd.bad_ring, 0, "%s: ring edges bound one triangle, water left",
            name);
-    TAP_EQ(vd.bad_shared, 0, "%s: other edges shared by two triangles",
-           name);
-    TAP_EQ(vd.bad_delaunay, 0, "%s: %zu interior edges locally Delaunay",
-           name, vd.interior);
+    TAP_EQ(vd.bad_shared, 0, "%s: other edges shared by two triangles", name);
+    TAP_EQ(vd.bad_delaunay, 0, "%s: %zu interior edges locally Delaunay", name,
+           vd.interior);
     free(tris);
     return dt;
 }
@@ -399,9 +396,8 @@ static int rings_valid(const wm_rings *r)
             return 0;
         for (size_t rj = 1; rj < r->nrings; rj++)
         {
-            if (rj != ri &&
-                wm_point_in_ring(r->pts + r->start[rj], wm_rings_len(r, rj),
-                                 q) != 0)
+            if (rj != ri && wm_point_in_ring(r->pts + r->start[rj],
+                                             wm_rings_len(r, rj), q) != 0)
                 return 0;
         }
     }
@@ -520,8 +516,7 @@ static void random_batch(int cases)
         {
             if (failed++ < 3)
             {
-                printf("# random case %d failed (status %d):\n", done,
-                       (int)st);
+                printf("# random case %d failed (status %d):\n", done, (int)st);
                 for (size_t ri = 0; ri < r.nrings; ri++)
                 {
                     printf("#   ring %zu:", ri);
@@ -587,8 +582,8 @@ int main(void)
     rect(&r, 0, 0, 4100, 4100, 1, 99);
     for (int i = 0; i < 20; i++)
         for (int j = 0; j < 20; j++)
-            rect(&r, 100 + 200 * i, 100 + 200 * j, 200 + 200 * i,
-                 200 + 200 * j, 0, (i + j) % 3);
+            rect(&r, 100 + 200 * i, 100 + 200 * j, 200 + 200 * i, 200 + 200 * j,
+                 0, (i + j) % 3);
     check("400 holes", &r);
 
     /* cocircular: 1x1 holes on a lattice, every lattice point is a vertex,
@@ -632,8 +627,7 @@ int main(void)
     simple = polar(&r, 100000, spiky);
     TAP_OK(simple, "spiky polar 1e5: generator simple");
     dt = check("spiky polar 1e5", &r);
-    printf("# spiky polar polygon (random radii), 1e5 vertices: %.3f s\n",
-           dt);
+    printf("# spiky polar polygon (random radii), 1e5 vertices: %.3f s\n", dt);
 
     /* a large square with 25000 points per side and 2500 holes */
     wm_rings_clear(&r);

@@ -20,8 +20,8 @@ int main(void)
     const double river[] = {3.3, 20.7, 60.1, 35.2, 64.0, 35.9, 120.4, 50.3};
     su_river(&s, river, 4, 3.1);
     /* a lake with an island, straddling the two blocks */
-    const double lake[] = {40, 60, 100, 62, 98, 120, 42, 118,
-                           60, 80, 60, 100, 80, 100, 80, 80};
+    const double lake[] = {40, 60, 100, 62,  98, 120, 42, 118,
+                           60, 80, 60,  100, 80, 100, 80, 80};
     const int counts[] = {4, 4};
     su_lake(&s, lake, counts, 2);
     /* a bowtie lake: both lobes filled (even-odd) */
@@ -41,8 +41,7 @@ int main(void)
     TAP_EQ(diff, 0, "shared border column bit-identical in both blocks");
 
     /* an odd window: every sample equal to the block's value */
-    TAP_EQ(wm_field_compute(&s, 37, 11, 53, 77, &w, NULL), WM_OK,
-           "odd window");
+    TAP_EQ(wm_field_compute(&s, 37, 11, 53, 77, &w, NULL), WM_OK, "odd window");
     diff = 0;
     for (int r = 0; r < 77; r++)
         for (int c = 0; c < 53; c++)
@@ -80,11 +79,11 @@ int main(void)
         const double px = 30, py = 26;
         const double t = ((px - ax) * (bx - ax) + (py - ay) * (by - ay)) /
                          ((bx - ax) * (bx - ax) + (by - ay) * (by - ay));
-        const double dx = px - (ax + t * (bx - ax)), dy = py - (ay + t * (by - ay));
+        const double dx = px - (ax + t * (bx - ax)),
+                     dy = py - (ay + t * (by - ay));
         const double ref = sqrt(dx * dx + dy * dy) - 3.1;
         TAP_OK(fabs(wm_field_at(&a, 30, 26) - ref) < 0.01,
-               "river distance %g vs %g", (double)wm_field_at(&a, 30, 26),
-               ref);
+               "river distance %g vs %g", (double)wm_field_at(&a, 30, 26), ref);
     }
     {
         wm_field g;

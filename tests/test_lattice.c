@@ -30,8 +30,8 @@ int main(void)
     TAP_EQ(wm_incircle(s0, s1, s2, (wm_pt){2, 2}), 1, "incircle: inside");
     TAP_EQ(wm_incircle(s0, s1, s2, (wm_pt){9, 9}), -1, "incircle: outside");
     const wm_pt L0 = {0, 0}, L1 = {1 << 26, 0}, L2 = {0, 1 << 26};
-    TAP_EQ(wm_incircle(L0, L1, L2, (wm_pt){(1 << 26) - 1, (1 << 26) - 1}),
-           1, "incircle exact at 2^26");
+    TAP_EQ(wm_incircle(L0, L1, L2, (wm_pt){(1 << 26) - 1, (1 << 26) - 1}), 1,
+           "incircle exact at 2^26");
 
     const wm_pt sq[4] = {{0, 0}, {10, 0}, {10, 10}, {0, 10}};
     TAP_EQ(wm_point_in_ring(sq, 4, (wm_pt){5, 5}), 1, "point inside");

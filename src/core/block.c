@@ -59,8 +59,8 @@ static wm_status group(const wm_rings *in, const int32_t *enc,
     size_t nouter = 0;
     for (size_t i = 0; i < nr; i++)
     {
-        const int outer = wm_ring_area2(in->pts + in->start[i],
-                                        wm_rings_len(in, i)) > 0;
+        const int outer =
+            wm_ring_area2(in->pts + in->start[i], wm_rings_len(in, i)) > 0;
         if (outer)
         {
             nouter++;
@@ -90,8 +90,8 @@ static wm_status group(const wm_rings *in, const int32_t *enc,
         goto nomem;
     memcpy(cur, hstart, nr * sizeof *cur);
     for (size_t i = 0; i < nr; i++)
-        if (enc[i] >= 0 && wm_ring_area2(in->pts + in->start[i],
-                                         wm_rings_len(in, i)) < 0)
+        if (enc[i] >= 0 &&
+            wm_ring_area2(in->pts + in->start[i], wm_rings_len(in, i)) < 0)
             hole[cur[enc[i]]++] = i;
     res->npolys = 0;
     for (size_t i = 0; i < nr; i++)
@@ -148,7 +148,8 @@ static wm_status triangulate(wm_block_result *res, const wm_ctx *ctx)
             if (!q)
             {
                 free(t);
-                return wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
+                return wm_fail(ctx, WM_ERR_NOMEM,
+                               "out of memory triangulating");
             }
             res->tris = q;
             cap = nc;
@@ -177,8 +178,7 @@ wm_status wm_block_run(const wm_scene *s, int64_t bx, int64_t by,
     res->by = by;
 
     double t0 = wm_now();
-    st = wm_field_compute(s, bx * s->n, by * s->n, s->n + 1, s->n + 1, &f,
-                          ctx);
+    st = wm_field_compute(s, bx * s->n, by * s->n, s->n + 1, s->n + 1, &f, ctx);
     if (st != WM_OK)
         return st;
     res->mixed_tiles = f.mixed;

@@ -8,58 +8,59 @@
 #include "scene.h"
 
 #ifdef __cplusplus
-extern "C" {
+extern "C"
+{
 #endif
 
-/** Stage indices of the timing table (the paper's Table 2 columns). */
-enum
-{
-    WM_STAGE_FIELD = 0,
-    WM_STAGE_EXTRACT,
-    WM_STAGE_SIMPLIFY,
-    WM_STAGE_HOLES,
-    WM_STAGE_TRIANGULATE,
-    WM_STAGE_COUNT
-};
+    /** Stage indices of the timing table (the paper's Table 2 columns). */
+    enum
+    {
+        WM_STAGE_FIELD = 0,
+        WM_STAGE_EXTRACT,
+        WM_STAGE_SIMPLIFY,
+        WM_STAGE_HOLES,
+        WM_STAGE_TRIANGULATE,
+        WM_STAGE_COUNT
+    };
 
-/** Options of the block pipeline. */
-typedef struct
-{
-    double simplify; /**< Douglas-Peucker tolerance, lattice units; 0 off */
-    int triangulate; /**< 0: polygons only */
-} wm_block_opts;
+    /** Options of the block pipeline. */
+    typedef struct
+    {
+        double simplify; /**< Douglas-Peucker tolerance, lattice units; 0 off */
+        int triangulate; /**< 0: polygons only */
+    } wm_block_opts;
 
-/**
- * A block's result, in block-local lattice units.
- *
- * Polygon p is rings poly_ring[p] .. poly_ring[p+1]-1 of `rings`, the first
- * its outer ring (CCW), the others its holes (CW), in a deterministic order.
- * Its triangles are tris[3*poly_tri[p] .. 3*poly_tri[p+1]-1], indices into
- * rings.pts, counter-clockwise.
- */
-typedef struct
-{
-    int64_t bx, by;
-    wm_rings rings;
-    size_t npolys;
-    size_t *poly_ring; /**< npolys + 1 (owned) */
-    size_t *poly_tri;  /**< npolys + 1 (owned) */
-    uint32_t *tris;    /**< (owned) */
-    double seconds[WM_STAGE_COUNT];
-    size_t mixed_tiles;
-    uint64_t pairs;
-} wm_block_result;
+    /**
+     * A block's result, in block-local lattice units.
+     *
+     * Polygon p is rings poly_ring[p] .. poly_ring[p+1]-1 of `rings`, the first
+     * its outer ring (CCW), the others its holes (CW), in a deterministic
+     * order. Its triangles are tris[3*poly_tri[p] .. 3*poly_tri[p+1]-1],
+     * indices into rings.pts, counter-clockwise.
+     */
+    typedef struct
+    {
+        int64_t bx, by;
+        wm_rings rings;
+        size_t npolys;
+        size_t *poly_ring; /**< npolys + 1 (owned) */
+        size_t *poly_tri;  /**< npolys + 1 (owned) */
+        uint32_t *tris;    /**< (owned) */
+        double seconds[WM_STAGE_COUNT];
+        size_t mixed_tiles;
+        uint64_t pairs;
+    } wm_block_result;
 
-/** Runs block (bx, by); `res` is overwritten (free with
- *  wm_block_result_free()). */
-wm_status wm_block_run(const wm_scene *s, int64_t bx, int64_t by,
-                       const wm_block_opts *opts, wm_block_result *res,
-                       const wm_ctx *ctx);
+    /** Runs block (bx, by); `res` is overwritten (free with
+     *  wm_block_result_free()). */
+    wm_status wm_block_run(const wm_scene *s, int64_t bx, int64_t by,
+                           const wm_block_opts *opts, wm_block_result *res,
+                           const wm_ctx *ctx);
 
-void wm_block_result_free(wm_block_result *res);
+    void wm_block_result_free(wm_block_result *res);
 
-/** Monotonic clock in seconds. */
-double wm_now(void);
+    /** Monotonic clock in seconds. */
+    double wm_now(void);
 
 #ifdef __cplusplus
 }

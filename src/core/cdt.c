@@ -90,17 +90,17 @@ typedef struct
 typedef struct
 {
     const wm_ctx *ctx;
-    wm_pt *p;      /* nv + 3 points: the input, then the super triangle */
-    int32_t *v;    /* origin vertex of each half-edge */
-    int32_t *tw;   /* twin half-edge, -1 on the super triangle's border */
-    uint8_t *con;  /* 1 on both half-edges of a ring edge */
-    int32_t *ve;   /* one half-edge leaving each vertex */
-    int32_t nv;    /* input vertices */
-    int32_t ntri;  /* triangles in use */
+    wm_pt *p;     /* nv + 3 points: the input, then the super triangle */
+    int32_t *v;   /* origin vertex of each half-edge */
+    int32_t *tw;  /* twin half-edge, -1 on the super triangle's border */
+    uint8_t *con; /* 1 on both half-edges of a ring edge */
+    int32_t *ve;  /* one half-edge leaving each vertex */
+    int32_t nv;   /* input vertices */
+    int32_t ntri; /* triangles in use */
     int32_t maxtri;
-    int32_t last;  /* triangle the next point location starts from */
-    uint32_t rng;  /* xorshift state for the stochastic walk */
-    ivec stack;    /* Lawson work stack */
+    int32_t last; /* triangle the next point location starts from */
+    uint32_t rng; /* xorshift state for the stochastic walk */
+    ivec stack;   /* Lawson work stack */
     /* constraint insertion scratch */
     int32_t *tstamp; /* per triangle: id of the cavity it last belonged to */
     int32_t *vstamp; /* per vertex: 2 * cavity id + side, to see repeats */
@@ -301,8 +301,8 @@ static wm_status locate(mesh *m, int32_t vi, int32_t *tri, int32_t *edge)
                 t = s;
         }
         if (t < 0)
-            return wm_fail(m->ctx, WM_ERR_INTERNAL,
-                           "cdt: point %d not located", (int)vi);
+            return wm_fail(m->ctx, WM_ERR_INTERNAL, "cdt: point %d not located",
+                           (int)vi);
     }
     if (nz >= 2)
     {
@@ -314,8 +314,8 @@ static wm_status locate(mesh *m, int32_t vi, int32_t *tri, int32_t *edge)
                 same = m->v[h];
         }
         return wm_fail(m->ctx, WM_ERR_INVALID,
-                       "cdt: duplicate vertex %d and %d at (%d, %d)",
-                       (int)same, (int)vi, (int)p.x, (int)p.y);
+                       "cdt: duplicate vertex %d and %d at (%d, %d)", (int)same,
+                       (int)vi, (int)p.x, (int)p.y);
     }
     *tri = t;
     *edge = (nz == 1) ? zero : -1;
@@ -493,8 +493,7 @@ static wm_status fill_side(mesh *m, chain *c, int32_t parent, size_t *used,
         }
         if (best == 0)
             return wm_fail(m->ctx, WM_ERR_INTERNAL,
-                           "cdt: empty pseudo-polygon %d-%d", (int)vl,
-                           (int)vh);
+                           "cdt: empty pseudo-polygon %d-%d", (int)vl, (int)vh);
         if (c->rep)
         {
             for (size_t x = lo + 1; x < hi; x++)
@@ -527,8 +526,7 @@ static wm_status fill_side(mesh *m, chain *c, int32_t parent, size_t *used,
             !ivec_push(&m->tstk, (int32_t)best) ||
             !ivec_push(&m->tstk, h + 1) ||
             !ivec_push(&m->tstk, (int32_t)best) ||
-            !ivec_push(&m->tstk, (int32_t)hi) ||
-            !ivec_push(&m->tstk, h + 2))
+            !ivec_push(&m->tstk, (int32_t)hi) || !ivec_push(&m->tstk, h + 2))
             return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
     }
     return WM_OK;
@@ -577,8 +575,8 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
         const int o1 = wm_orient(pa, m->p[v1], pb);
         if (o1 == 0 && dot(pa, m->p[v1], pb) > 0)
             return wm_fail(m->ctx, WM_ERR_INVALID,
-                           "cdt: vertex %d lies on ring edge %d-%d",
-                           (int)v1, (int)a, (int)b);
+                           "cdt: vertex %d lies on ring edge %d-%d", (int)v1,
+                           (int)a, (int)b);
         if (o1 > 0 && wm_orient(pa, m->p[v2], pb) < 0)
         {
             start = h;
@@ -624,8 +622,7 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
         if (m->con[g])
             return wm_fail(m->ctx, WM_ERR_INVALID,
                            "cdt: ring edge %d-%d crosses ring edge %d-%d",
-                           (int)a, (int)b, (int)m->v[g],
-                           (int)m->v[nxt(g)]);
+                           (int)a, (int)b, (int)m->v[g], (int)m->v[nxt(g)]);
         if (!ivec_push(&m->cav, g / 3))
             return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
         m->tstamp[g / 3] = m->cid;
@@ -844,8 +841,7 @@ wm_status wm_cdt_triangulate(const wm_pt *pts, const size_t *ring_start,
     cnt = alloc_n(RADIX_SIZE, sizeof *cnt);
     if (!m.p || !m.v || !m.tw || !m.con || !m.ve || !keys || !ktmp || !cnt)
     {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory (%zu vertices)",
-                     n);
+        st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory (%zu vertices)", n);
         goto cleanup;
     }
 

@@ -313,8 +313,7 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                 if (cpos >= q)
                     break;
                 const int64_t m = (cpos / S) & 3;
-                const wm_pt corner = {m == 1 || m == 2 ? S : 0,
-                                      m >= 2 ? S : 0};
+                const wm_pt corner = {m == 1 || m == 2 ? S : 0, m >= 2 ? S : 0};
                 if (wm_rings_push(out, corner) != WM_OK)
                     goto nomem;
             }

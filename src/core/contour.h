@@ -7,25 +7,26 @@
 #include "field.h"
 
 #ifdef __cplusplus
-extern "C" {
+extern "C"
+{
 #endif
 
-/**
- * Extracts the boundary of the water region {d <= 0} of a block's field,
- * clipped exactly to the block square, as rings in block-local lattice
- * units (sample (c, r) of the block at (c * WM_Q, r * WM_Q)).
- *
- * The field must cover the block's (n+1) x (n+1) samples (f->w == f->h ==
- * n + 1). `out` is cleared first; caller frees with wm_rings_free().
- *
- * Guarantees: the wm_rings invariants (simple, disjoint, >= 3 vertices,
- * water on the left). The only vertices on the block square are the
- * crossings of the boundary with it and the square's corners that are
- * water; crossing positions depend only on the two samples of their cell
- * edge, so both blocks sharing an edge produce the same vertices there.
- */
-wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
-                             const wm_ctx *ctx);
+    /**
+     * Extracts the boundary of the water region {d <= 0} of a block's field,
+     * clipped exactly to the block square, as rings in block-local lattice
+     * units (sample (c, r) of the block at (c * WM_Q, r * WM_Q)).
+     *
+     * The field must cover the block's (n+1) x (n+1) samples (f->w == f->h ==
+     * n + 1). `out` is cleared first; caller frees with wm_rings_free().
+     *
+     * Guarantees: the wm_rings invariants (simple, disjoint, >= 3 vertices,
+     * water on the left). The only vertices on the block square are the
+     * crossings of the boundary with it and the square's corners that are
+     * water; crossing positions depend only on the two samples of their cell
+     * edge, so both blocks sharing an edge produce the same vertices there.
+     */
+    wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
+                                 const wm_ctx *ctx);
 
 #ifdef __cplusplus
 }

@@ -230,8 +230,7 @@ static double seg_dist(const inputs *in, int64_t ax, int64_t ay, int64_t bx,
 /* Signed distance (lattice units, negative in water) from (x, y) to the
  * union of the block's inputs, in double precision; inputs farther than
  * `reach` are ignored (the result is then +reach or more). */
-static double union_distance(const inputs *in, double x, double y,
-                             double reach)
+static double union_distance(const inputs *in, double x, double y, double reach)
 {
     const wm_scene *s = in->s;
     double d = reach;
@@ -458,7 +457,8 @@ static int check_fn(void *arg, size_t k)
     /* a ring vertex in the closed triangle (a, c, b), other than a, b */
     if (k != ck->ka && k != ck->kb)
     {
-        const int o1 = wm_orient(ck->a, ck->c, p), o2 = wm_orient(ck->c, ck->b, p);
+        const int o1 = wm_orient(ck->a, ck->c, p),
+                  o2 = wm_orient(ck->c, ck->b, p);
         const int o3 = wm_orient(ck->b, ck->a, p);
         if ((o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0))
         {
@@ -470,8 +470,8 @@ static int check_fn(void *arg, size_t k)
     const wm_pt ne[2][2] = {{ck->a, ck->c}, {ck->c, ck->b}};
     for (int e = 0; e < 2; e++)
     {
-        const int shares_a = e == 0 && (k2 == ck->ka);   /* q == a */
-        const int shares_b = e == 1 && (k == ck->kb);    /* p == b */
+        const int shares_a = e == 0 && (k2 == ck->ka); /* q == a */
+        const int shares_b = e == 1 && (k == ck->kb);  /* p == b */
         if (shares_a || shares_b)
         {
             /* adjacent edge: may share only the common vertex */
@@ -497,9 +497,9 @@ static int check_fn(void *arg, size_t k)
 
 /* True when c may be inserted into edge ka (to its successor) of the
  * current rings: see the file comment, step 4. */
-static int can_insert(const inputs *in, const ringgrid *g, size_t ka,
-                      wm_pt c, int32_t S, const uint8_t *split,
-                      const insertion *ins, size_t nins)
+static int can_insert(const inputs *in, const ringgrid *g, size_t ka, wm_pt c,
+                      int32_t S, const uint8_t *split, const insertion *ins,
+                      size_t nins)
 {
     const wm_rings *rings = g->r;
     const size_t kb = succ(rings, g->ring_of, ka);
@@ -514,8 +514,8 @@ static int can_insert(const inputs *in, const ringgrid *g, size_t ka,
     const int32_t x0 = a.x < b.x ? a.x : b.x, x1 = a.x > b.x ? a.x : b.x;
     const int32_t y0 = a.y < b.y ? a.y : b.y, y1 = a.y > b.y ? a.y : b.y;
     visit_edges(g, (x0 < c.x ? x0 : c.x) - 1, (y0 < c.y ? y0 : c.y) - 1,
-                (x1 > c.x ? x1 : c.x) + 1, (y1 > c.y ? y1 : c.y) + 1,
-                check_fn, &ck);
+                (x1 > c.x ? x1 : c.x) + 1, (y1 > c.y ? y1 : c.y) + 1, check_fn,
+                &ck);
     /* and against corners inserted earlier in this pass */
     for (size_t j = 0; ck.ok && j < nins; j++)
     {
@@ -535,8 +535,7 @@ static int can_insert(const inputs *in, const ringgrid *g, size_t ka,
 /* One pass: tries every candidate against the current rings and rebuilds
  * them with the accepted corners; *ninserted says how many. */
 static wm_status insert_pass(const inputs *in, wm_rings *rings,
-                             const wm_pt *cand, size_t ncand,
-                             size_t *ninserted)
+                             const wm_pt *cand, size_t ncand, size_t *ninserted)
 {
     wm_status st = WM_OK;
     const int32_t S = in->s->n * WM_Q;
@@ -593,7 +592,7 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
             goto nomem;
         split[ka] = 1;
         split[pred(rings, g.ring_of, ka)] = 1; /* neighbours stay as they */
-        split[kb] = 1;                          /* are: one corner per run */
+        split[kb] = 1;                         /* are: one corner per run */
     }
 
     if (nins == 0)
@@ -631,9 +630,8 @@ cleanup:
     return st;
 }
 
-wm_status wm_crease_recover(const wm_scene *s, const wm_field *f,
-                            int64_t bx, int64_t by, wm_rings *rings,
-                            const wm_ctx *ctx)
+wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
+                            int64_t by, wm_rings *rings, const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
     prim *pr = NULL;
@@ -664,15 +662,18 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f,
     {
         const wm_river_seg *q = &s->segs[in.segs[i]];
         const double ax = (double)(q->ax - in.X0), ay = (double)(q->ay - in.Y0);
-        const double bx2 = (double)(q->bx - in.X0), by2 = (double)(q->by - in.Y0);
+        const double bx2 = (double)(q->bx - in.X0),
+                     by2 = (double)(q->by - in.Y0);
         const double dx = bx2 - ax, dy = by2 - ay, l = sqrt(dx * dx + dy * dy);
         prim p[4];
         int np = 0;
         if (l > 0)
         {
             const double nx = -dy / l * q->r, ny = dx / l * q->r;
-            p[np++] = (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, in.segs[i]};
-            p[np++] = (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, in.segs[i]};
+            p[np++] =
+                (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, in.segs[i]};
+            p[np++] =
+                (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, in.segs[i]};
         }
         p[np++] = (prim){ax, ay, q->r, 0, 1, in.segs[i]};
         p[np++] = (prim){bx2, by2, q->r, 0, 1, in.segs[i]};
@@ -686,8 +687,11 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f,
         for (size_t e = s->poly_start[pidx]; e < s->poly_start[pidx + 1]; e++)
         {
             const wm_lake_edge *q = &s->edges[e];
-            prim p = {(double)(q->ax - in.X0), (double)(q->ay - in.Y0),
-                      (double)(q->bx - in.X0), (double)(q->by - in.Y0), 0,
+            prim p = {(double)(q->ax - in.X0),
+                      (double)(q->ay - in.Y0),
+                      (double)(q->bx - in.X0),
+                      (double)(q->by - in.Y0),
+                      0,
                       (uint32_t)(s->nsegs + e)};
             double b[4];
             prim_box(&p, b);
@@ -713,8 +717,10 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f,
         b[3] = fmin(b[3], hi);
         if (b[0] > b[2] || b[1] > b[3])
             continue;
-        for (int64_t cy = (int64_t)floor(b[1] / PC); cy <= (int64_t)floor(b[3] / PC); cy++)
-            for (int64_t cx = (int64_t)floor(b[0] / PC); cx <= (int64_t)floor(b[2] / PC); cx++)
+        for (int64_t cy = (int64_t)floor(b[1] / PC);
+             cy <= (int64_t)floor(b[3] / PC); cy++)
+            for (int64_t cx = (int64_t)floor(b[0] / PC);
+                 cx <= (int64_t)floor(b[2] / PC); cx++)
             {
                 const cellref c = {ckey(cx, cy), (uint32_t)i};
                 if (!push((void **)&pc, &npc, &pccap, &c, sizeof c))

@@ -36,14 +36,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int64_t floordiv(int64_t a, int64_t b)
-{
-    int64_t q = a / b;
-    if ((a % b != 0) && ((a < 0) != (b < 0)))
-        q--;
-    return q;
-}
-
 static int64_t floordiv128(wm_i128 a, wm_i128 b)
 {
     wm_i128 q = a / b;
@@ -138,7 +130,8 @@ typedef struct
 static void tile_span(int64_t a, int64_t b, int64_t origin, int64_t tsq,
                       int32_t nt, int32_t *lo, int32_t *hi)
 {
-    int64_t l = floordiv(a - origin - 1, tsq), h = floordiv(b - origin, tsq);
+    int64_t l = wm_floordiv(a - origin - 1, tsq),
+            h = wm_floordiv(b - origin, tsq);
     if (l < 0)
         l = 0;
     if (h > nt - 1)
@@ -152,9 +145,8 @@ static void tile_span(int64_t a, int64_t b, int64_t origin, int64_t tsq,
  * Liang-Barsky clipping against the tile's box grown by grow + 2 (the
  * extra two units absorb rounding, so no segment in reach is ever left
  * out; one out of reach may be kept, which costs time, never accuracy). */
-static int seg_reaches_tile(const work *w, int32_t tx, int32_t ty,
-                            int64_t ax, int64_t ay, int64_t bx, int64_t by,
-                            int64_t grow)
+static int seg_reaches_tile(const work *w, int32_t tx, int32_t ty, int64_t ax,
+                            int64_t ay, int64_t bx, int64_t by, int64_t grow)
 {
     const int64_t x0 = w->X0 + (int64_t)tx * w->tsq - grow - 2;
     const int64_t y0 = w->Y0 + (int64_t)ty * w->tsq - grow - 2;
@@ -236,8 +228,8 @@ static wm_status bin_items(work *w)
                 for (int32_t tx = tx0; tx <= tx1; tx++)
                 {
                     const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
-                    if (!seg_reaches_tile(w, tx, ty, g->ax, g->ay, g->bx,
-                                          g->by, grow))
+                    if (!seg_reaches_tile(w, tx, ty, g->ax, g->ay, g->bx, g->by,
+                                          grow))
                         continue;
                     if (pass == 0)
                         cs[t]++;
@@ -253,11 +245,11 @@ static wm_status bin_items(work *w)
                 const wm_lake_edge *g = &s->edges[e];
                 int32_t tx0, tx1, ty0, ty1;
                 tile_span((g->ax < g->bx ? g->ax : g->bx) - band,
-                          (g->ax > g->bx ? g->ax : g->bx) + band, w->X0,
-                          w->tsq, f->ntx, &tx0, &tx1);
+                          (g->ax > g->bx ? g->ax : g->bx) + band, w->X0, w->tsq,
+                          f->ntx, &tx0, &tx1);
                 tile_span((g->ay < g->by ? g->ay : g->by) - band,
-                          (g->ay > g->by ? g->ay : g->by) + band, w->Y0,
-                          w->tsq, f->nty, &ty0, &ty1);
+                          (g->ay > g->by ? g->ay : g->by) + band, w->Y0, w->tsq,
+                          f->nty, &ty0, &ty1);
                 for (int32_t ty = ty0; ty <= ty1; ty++)
                     for (int32_t tx = tx0; tx <= tx1; tx++)
                     {
@@ -346,8 +338,8 @@ static wm_status build_crossings(work *w)
     for (size_t k = 0; k < w->npolys; k++)
     {
         const wm_box b = s->poly_box[w->polys[k]];
-        int64_t r0 = -floordiv(-b.y0, WM_Q) - f->gy0;
-        int64_t r1 = floordiv(b.y1, WM_Q) - f->gy0;
+        int64_t r0 = -wm_floordiv(-b.y0, WM_Q) - f->gy0;
+        int64_t r1 = wm_floordiv(b.y1, WM_Q) - f->gy0;
         if (r0 < 0)
             r0 = 0;
         if (r1 > f->h - 1)
@@ -394,8 +386,8 @@ static wm_status build_crossings(work *w)
                     yb = g->ay;
                 }
                 /* rows with Y in [ya, yb) */
-                int64_t r0 = -floordiv(-ya, WM_Q) - f->gy0;
-                int64_t r1 = -floordiv(-yb, WM_Q) - 1 - f->gy0;
+                int64_t r0 = -wm_floordiv(-ya, WM_Q) - f->gy0;
+                int64_t r1 = -wm_floordiv(-yb, WM_Q) - 1 - f->gy0;
                 if (r0 < 0)
                     r0 = 0;
                 if (r1 > f->h - 1)
@@ -406,8 +398,7 @@ static wm_status build_crossings(work *w)
                     const int64_t Y = (f->gy0 + r) * WM_Q;
                     const wm_i128 num = (wm_i128)(xa - w->X0) * dy +
                                         (wm_i128)(Y - ya) * (xb - xa);
-                    const int64_t c =
-                        floordiv128(num, (wm_i128)dy * WM_Q) + 1;
+                    const int64_t c = floordiv128(num, (wm_i128)dy * WM_Q) + 1;
                     const size_t key = w->key0[k] + (size_t)(r - w->row0[k]);
                     if (c <= 0)
                     {
@@ -474,8 +465,8 @@ static int inside_at(const work *w, size_t k, int32_t c, int32_t r)
  * is the lattice position of tile sample (0, 0). Samples beyond the window
  * are computed too (fixed trip counts vectorize) and never read. */
 WM_CLONES
-static void seg_dist2(int64_t ax, int64_t ay, int64_t bx, int64_t by,
-                      int64_t X, int64_t Y, double *d2)
+static void seg_dist2(int64_t ax, int64_t ay, int64_t bx, int64_t by, int64_t X,
+                      int64_t Y, double *d2)
 {
     const double abx = (double)(bx - ax), aby = (double)(by - ay);
     const double len2 = abx * abx + aby * aby;
@@ -513,16 +504,15 @@ static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
 
 /* du2 = min(du2, d^2 to edge) over a full tile. */
 WM_CLONES
-static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y,
-                      double *du2, double *d2)
+static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
+                      double *d2)
 {
     seg_dist2(g->ax, g->ay, g->bx, g->by, X, Y, d2);
     for (int32_t j = 0; j < TS1 * TS1; j++)
         du2[j] = d2[j] < du2[j] ? d2[j] : du2[j];
 }
 
-static wm_status compute_tile(work *w, int32_t tx, int32_t ty,
-                              uint8_t *haspoly)
+static wm_status compute_tile(work *w, int32_t tx, int32_t ty, uint8_t *haspoly)
 {
     const wm_scene *s = w->s;
     wm_field *f = w->f;
@@ -539,14 +529,14 @@ static wm_status compute_tile(work *w, int32_t tx, int32_t ty,
     for (size_t i = e0; i < e1; i++)
         haspoly[w->tedge_poly[i]] = 1;
     int water = 0;
-    const int64_t X = w->X0 + (int64_t)c0 * WM_Q, Y = w->Y0 + (int64_t)r0 * WM_Q;
-    for (size_t i = w->tpoly_start[t]; i < w->tpoly_start[t + 1] && !water;
-         i++)
+    const int64_t X = w->X0 + (int64_t)c0 * WM_Q,
+                  Y = w->Y0 + (int64_t)r0 * WM_Q;
+    for (size_t i = w->tpoly_start[t]; i < w->tpoly_start[t + 1] && !water; i++)
     {
         const size_t k = w->tpoly[i];
         const wm_box b = s->poly_box[w->polys[k]];
-        if (!haspoly[k] && X >= b.x0 && X <= b.x1 && Y >= b.y0 &&
-            Y <= b.y1 && inside_at(w, k, c0, r0))
+        if (!haspoly[k] && X >= b.x0 && X <= b.x1 && Y >= b.y0 && Y <= b.y1 &&
+            inside_at(w, k, c0, r0))
             water = 1;
     }
     for (size_t i = e0; i < e1; i++)
@@ -620,8 +610,7 @@ static wm_status compute_tile(work *w, int32_t tx, int32_t ty,
 }
 
 wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
-                           int32_t w, int32_t h, wm_field *f,
-                           const wm_ctx *ctx)
+                           int32_t w, int32_t h, wm_field *f, const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
     work wk;
@@ -652,13 +641,17 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
     if (s->nbx > 0)
     {
         const int64_t side = (int64_t)s->n * WM_Q;
-        int64_t bx0 = floordiv(wk.X0, side), by0 = floordiv(wk.Y0, side);
-        int64_t bx1 = floordiv(wk.X0 + (int64_t)(w - 1) * WM_Q, side);
-        int64_t by1 = floordiv(wk.Y0 + (int64_t)(h - 1) * WM_Q, side);
-        if (bx0 < s->bx0) bx0 = s->bx0;
-        if (by0 < s->by0) by0 = s->by0;
-        if (bx1 > s->bx0 + s->nbx - 1) bx1 = s->bx0 + s->nbx - 1;
-        if (by1 > s->by0 + s->nby - 1) by1 = s->by0 + s->nby - 1;
+        int64_t bx0 = wm_floordiv(wk.X0, side), by0 = wm_floordiv(wk.Y0, side);
+        int64_t bx1 = wm_floordiv(wk.X0 + (int64_t)(w - 1) * WM_Q, side);
+        int64_t by1 = wm_floordiv(wk.Y0 + (int64_t)(h - 1) * WM_Q, side);
+        if (bx0 < s->bx0)
+            bx0 = s->bx0;
+        if (by0 < s->by0)
+            by0 = s->by0;
+        if (bx1 > s->bx0 + s->nbx - 1)
+            bx1 = s->bx0 + s->nbx - 1;
+        if (by1 > s->by0 + s->nby - 1)
+            by1 = s->by0 + s->nby - 1;
         if (bx0 <= bx1 && by0 <= by1)
         {
             st = gather(s, s->blk_seg_start, s->blk_seg, bx0, by0, bx1, by1,

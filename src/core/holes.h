@@ -7,31 +7,34 @@
 #include "wm_core.h"
 
 #ifdef __cplusplus
-extern "C" {
+extern "C"
+{
 #endif
 
-/**
- * Computes, for every ring of `rings`, the index of the smallest ring that
- * strictly encloses it, or -1 when none does.
- *
- * Contract: rings satisfy the wm_rings invariants (simple, pairwise disjoint,
- * water on the left). Because rings never cross, nesting alternates: the
- * enclosing ring of a hole (clockwise) is the outer ring it belongs to, and
- * the enclosing ring of an outer ring (if any) is a hole of another polygon.
- *
- * Method: for each ring take its lowest-leftmost vertex q; the ring edge
- * first hit by the ray from q towards -x decides (that edge's ring S: if the
- * edge's direction puts q on S's interior side then S encloses the ring,
- * otherwise S's own enclosing ring does). Edges are bucketed by y so a query
- * scans one bucket; all comparisons are exact. O(n log n) for n vertices.
- *
- * @param rings     the rings (borrowed)
- * @param enclosing out: rings->nrings entries, allocated by the caller
- * @param ctx       error sink, may be NULL
- * @return WM_OK, WM_ERR_NOMEM
- */
-wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
-                           const wm_ctx *ctx);
+    /**
+     * Computes, for every ring of `rings`, the index of the smallest ring that
+     * strictly encloses it, or -1 when none does.
+     *
+     * Contract: rings satisfy the wm_rings invariants (simple, pairwise
+     * disjoint, water on the left). Because rings never cross, nesting
+     * alternates: the enclosing ring of a hole (clockwise) is the outer ring it
+     * belongs to, and the enclosing ring of an outer ring (if any) is a hole of
+     * another polygon.
+     *
+     * Method: for each ring take its lowest-leftmost vertex q; the ring edge
+     * first hit by the ray from q towards -x decides (that edge's ring S: if
+     * the edge's direction puts q on S's interior side then S encloses the
+     * ring, otherwise S's own enclosing ring does). Edges are bucketed by y so
+     * a query scans one bucket; all comparisons are exact. O(n log n) for n
+     * vertices.
+     *
+     * @param rings     the rings (borrowed)
+     * @param enclosing out: rings->nrings entries, allocated by the caller
+     * @param ctx       error sink, may be NULL
+     * @return WM_OK, WM_ERR_NOMEM
+     */
+    wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
+                               const wm_ctx *ctx);
 
 #ifdef __cplusplus
 }

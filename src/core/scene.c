@@ -13,14 +13,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-static int64_t floordiv(int64_t a, int64_t b)
-{
-    int64_t q = a / b;
-    if ((a % b != 0) && ((a < 0) != (b < 0)))
-        q--;
-    return q;
-}
-
 wm_box wm_scene_block_box(const wm_scene *s, int64_t bx, int64_t by)
 {
     const int64_t side = (int64_t)s->n * WM_Q;
@@ -29,14 +21,14 @@ wm_box wm_scene_block_box(const wm_scene *s, int64_t bx, int64_t by)
 }
 
 /* Block index range touched by box grown by `grow` lattice units. */
-static void block_range(const wm_scene *s, wm_box b, int64_t grow,
-                        int64_t *x0, int64_t *y0, int64_t *x1, int64_t *y1)
+static void block_range(const wm_scene *s, wm_box b, int64_t grow, int64_t *x0,
+                        int64_t *y0, int64_t *x1, int64_t *y1)
 {
     const int64_t side = (int64_t)s->n * WM_Q;
-    *x0 = floordiv(b.x0 - grow, side);
-    *y0 = floordiv(b.y0 - grow, side);
-    *x1 = floordiv(b.x1 + grow, side);
-    *y1 = floordiv(b.y1 + grow, side);
+    *x0 = wm_floordiv(b.x0 - grow, side);
+    *y0 = wm_floordiv(b.y0 - grow, side);
+    *x1 = wm_floordiv(b.x1 + grow, side);
+    *y1 = wm_floordiv(b.y1 + grow, side);
 }
 
 static wm_box seg_box(const wm_river_seg *g)
@@ -142,10 +134,14 @@ wm_status wm_scene_index(wm_scene *s, const wm_ctx *ctx)
             const int64_t xs[2] = {g->ax, g->bx}, ys[2] = {g->ay, g->by};
             for (int k = 0; k < 2; k++)
             {
-                if (xs[k] < b.x0) b.x0 = xs[k];
-                if (xs[k] > b.x1) b.x1 = xs[k];
-                if (ys[k] < b.y0) b.y0 = ys[k];
-                if (ys[k] > b.y1) b.y1 = ys[k];
+                if (xs[k] < b.x0)
+                    b.x0 = xs[k];
+                if (xs[k] > b.x1)
+                    b.x1 = xs[k];
+                if (ys[k] < b.y0)
+                    b.y0 = ys[k];
+                if (ys[k] > b.y1)
+                    b.y1 = ys[k];
             }
         }
         s->poly_box[p] = b;
@@ -160,15 +156,19 @@ wm_status wm_scene_index(wm_scene *s, const wm_ctx *ctx)
     const int64_t grow = (int64_t)ceil(s->max_r) + (int64_t)s->band * WM_Q + 1;
     for (size_t i = 0; i < s->nsegs + s->npolys; i++)
     {
-        wm_box b = i < s->nsegs ? seg_box(&s->segs[i])
-                                : s->poly_box[i - s->nsegs];
+        wm_box b =
+            i < s->nsegs ? seg_box(&s->segs[i]) : s->poly_box[i - s->nsegs];
         if (!have)
             all = b;
         have = 1;
-        if (b.x0 < all.x0) all.x0 = b.x0;
-        if (b.y0 < all.y0) all.y0 = b.y0;
-        if (b.x1 > all.x1) all.x1 = b.x1;
-        if (b.y1 > all.y1) all.y1 = b.y1;
+        if (b.x0 < all.x0)
+            all.x0 = b.x0;
+        if (b.y0 < all.y0)
+            all.y0 = b.y0;
+        if (b.x1 > all.x1)
+            all.x1 = b.x1;
+        if (b.y1 > all.y1)
+            all.y1 = b.y1;
     }
     if (!have)
     {

@@ -16,83 +16,85 @@
 #include <stdint.h>
 
 #ifdef __cplusplus
-extern "C" {
+extern "C"
+{
 #endif
 
-/** Status returned by every fallible core function. */
-typedef enum
-{
-    WM_OK = 0,
-    WM_ERR_NOMEM,     /**< an allocation failed or a size overflowed */
-    WM_ERR_INVALID,   /**< the input breaks the function's contract */
-    WM_ERR_CANCELLED, /**< the progress callback asked to stop */
-    WM_ERR_INTERNAL   /**< an invariant failed: a bug, reported not hidden */
-} wm_status;
+    /** Status returned by every fallible core function. */
+    typedef enum
+    {
+        WM_OK = 0,
+        WM_ERR_NOMEM,     /**< an allocation failed or a size overflowed */
+        WM_ERR_INVALID,   /**< the input breaks the function's contract */
+        WM_ERR_CANCELLED, /**< the progress callback asked to stop */
+        WM_ERR_INTERNAL /**< an invariant failed: a bug, reported not hidden */
+    } wm_status;
 
-/** Error sink. The GDAL side routes messages to CPLError; tests capture them.
- *  A NULL handler drops messages. */
-typedef void (*wm_error_fn)(void *user, wm_status status, const char *msg);
+    /** Error sink. The GDAL side routes messages to CPLError; tests capture
+     * them. A NULL handler drops messages. */
+    typedef void (*wm_error_fn)(void *user, wm_status status, const char *msg);
 
-typedef struct wm_ctx
-{
-    wm_error_fn error; /**< may be NULL */
-    void *user;        /**< passed back to error() */
-} wm_ctx;
+    typedef struct wm_ctx
+    {
+        wm_error_fn error; /**< may be NULL */
+        void *user;        /**< passed back to error() */
+    } wm_ctx;
 
-/** Reports a formatted message through ctx (may be NULL) and returns status,
- *  so callers can write `return wm_fail(ctx, WM_ERR_NOMEM, "...")`. */
-wm_status wm_fail(const wm_ctx *ctx, wm_status status, const char *fmt, ...)
+    /** Reports a formatted message through ctx (may be NULL) and returns
+     * status, so callers can write `return wm_fail(ctx, WM_ERR_NOMEM, "...")`.
+     */
+    wm_status wm_fail(const wm_ctx *ctx, wm_status status, const char *fmt, ...)
 #if defined(__GNUC__)
-    __attribute__((format(printf, 3, 4)))
+        __attribute__((format(printf, 3, 4)))
 #endif
-    ;
+        ;
 
-/** A block-local lattice point. Coordinates lie in [0, WM_LOCAL_MAX]. */
-typedef struct
-{
-    int32_t x, y;
-} wm_pt;
+    /** A block-local lattice point. Coordinates lie in [0, WM_LOCAL_MAX]. */
+    typedef struct
+    {
+        int32_t x, y;
+    } wm_pt;
 
 /** Largest block-local lattice coordinate the core accepts (2^24): keeps
  *  orientation products in int64 and in-circle products in __int128. */
 #define WM_LOCAL_MAX (INT32_C(1) << 24)
 
-/**
- * A set of rings in one block, vertices concatenated.
- *
- * Ring r owns pts[start[r]] .. pts[start[r+1]-1]; start has nrings+1 entries
- * (start[0] == 0, start[nrings] == npts). Rings are implicitly closed: the last
- * vertex is not a repeat of the first. Invariants the producers guarantee and
- * the consumers may rely on: every ring has >= 3 vertices, no two consecutive
- * vertices are equal, rings are simple and pairwise disjoint (they neither
- * cross nor touch), water is on the left.
- */
-typedef struct
-{
-    wm_pt *pts;
-    size_t npts, pts_cap;
-    size_t *start; /**< nrings + 1 entries once a ring exists */
-    size_t nrings, start_cap;
-} wm_rings;
+    /**
+     * A set of rings in one block, vertices concatenated.
+     *
+     * Ring r owns pts[start[r]] .. pts[start[r+1]-1]; start has nrings+1
+     * entries (start[0] == 0, start[nrings] == npts). Rings are implicitly
+     * closed: the last vertex is not a repeat of the first. Invariants the
+     * producers guarantee and the consumers may rely on: every ring has >= 3
+     * vertices, no two consecutive vertices are equal, rings are simple and
+     * pairwise disjoint (they neither cross nor touch), water is on the left.
+     */
+    typedef struct
+    {
+        wm_pt *pts;
+        size_t npts, pts_cap;
+        size_t *start; /**< nrings + 1 entries once a ring exists */
+        size_t nrings, start_cap;
+    } wm_rings;
 
-/** Empties the set, keeping its memory. */
-void wm_rings_clear(wm_rings *r);
-/** Frees the memory; r may be NULL. The struct itself is the caller's. */
-void wm_rings_free(wm_rings *r);
-/** Appends a point to the ring being built. */
-wm_status wm_rings_push(wm_rings *r, wm_pt p);
-/** Closes the ring being built (the points pushed since the last close). */
-wm_status wm_rings_close(wm_rings *r);
-/** Number of vertices of ring i. */
-static inline size_t wm_rings_len(const wm_rings *r, size_t i)
-{
-    return r->start[i + 1] - r->start[i];
-}
-/** 128-bit integer for exact products (GCC/Clang extension, named once). */
-__extension__ typedef __int128 wm_i128;
+    /** Empties the set, keeping its memory. */
+    void wm_rings_clear(wm_rings *r);
+    /** Frees the memory; r may be NULL. The struct itself is the caller's. */
+    void wm_rings_free(wm_rings *r);
+    /** Appends a point to the ring being built. */
+    wm_status wm_rings_push(wm_rings *r, wm_pt p);
+    /** Closes the ring being built (the points pushed since the last close). */
+    wm_status wm_rings_close(wm_rings *r);
+    /** Number of vertices of ring i. */
+    static inline size_t wm_rings_len(const wm_rings *r, size_t i)
+    {
+        return r->start[i + 1] - r->start[i];
+    }
+    /** 128-bit integer for exact products (GCC/Clang extension, named once). */
+    __extension__ typedef __int128 wm_i128;
 
-/** Twice the signed area of a ring of n points, exact (positive: CCW). */
-wm_i128 wm_ring_area2(const wm_pt *pts, size_t n);
+    /** Twice the signed area of a ring of n points, exact (positive: CCW). */
+    wm_i128 wm_ring_area2(const wm_pt *pts, size_t n);
 
 #ifdef __cplusplus
 }

@@ -55,9 +55,8 @@ OGRSpatialReferenceH CPL_DLL WMGetWorkingSRS(OGRLayerH hRivers,
  *         cancellation). Geometries are in the working CRS
  *         (WMGetWorkingSRS).
  */
-CPLErr CPL_DLL WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes,
-                          OGRLayerH hWater, OGRLayerH hMesh,
-                          CSLConstList papszOptions,
+CPLErr CPL_DLL WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes, OGRLayerH hWater,
+                          OGRLayerH hMesh, CSLConstList papszOptions,
                           GDALProgressFunc pfnProgress, void *pProgressArg);
 
 CPL_C_END

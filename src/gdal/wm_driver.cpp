@@ -70,18 +70,16 @@ class WaterMeshDataset final : public GDALDataset
     CPLErr GetGeoTransform(double *padfGT) override;
     const OGRSpatialReference *GetSpatialRef() const override
     {
-        return nBands ? OGRSpatialReference::FromHandle(
-                                  m_poScene->hSRS)
-                            : nullptr;
+        return nBands ? OGRSpatialReference::FromHandle(m_poScene->hSRS)
+                      : nullptr;
     }
 
     /** Results of the blocks touching env (all if null), in block order. */
     bool GetBlocks(const OGREnvelope *env, std::vector<ResultPtr> &out);
 };
 
-class WaterMeshLayer final
-    : public OGRLayer,
-      public OGRGetNextFeatureThroughRaw<WaterMeshLayer>
+class WaterMeshLayer final : public OGRLayer,
+                             public OGRGetNextFeatureThroughRaw<WaterMeshLayer>
 {
     WaterMeshDataset *m_poDS;
     bool m_bMesh;
@@ -108,12 +106,11 @@ class WaterMeshLayer final
     DEFINE_GET_NEXT_FEATURE_THROUGH_RAW(WaterMeshLayer)
     GIntBig GetFeatureCount(int bForce) override;
     OGRErr GetExtent(OGREnvelope *psExtent, int bForce) override;
-    OGRErr GetExtent(int iGeomField, OGREnvelope *psExtent,
-                     int bForce) override
+    OGRErr GetExtent(int iGeomField, OGREnvelope *psExtent, int bForce) override
     {
-        return iGeomField == 0 ? GetExtent(psExtent, bForce)
-                               : OGRLayer::GetExtent(iGeomField, psExtent,
-                                                     bForce);
+        return iGeomField == 0
+                   ? GetExtent(psExtent, bForce)
+                   : OGRLayer::GetExtent(iGeomField, psExtent, bForce);
     }
     int TestCapability(const char *pszCap) override;
 };
@@ -183,7 +180,7 @@ static int cache_sink(void *user, wm_block_result *res)
     try
     {
         copy = new wm_block_result(*res);
-        memset(res, 0, sizeof *res); /* ownership moved to copy */
+        memset(res, 0, sizeof *res);        /* ownership moved to copy */
         ResultPtr p(copy, ResultDeleter()); /* deletes copy if it throws */
         copy = nullptr;
         (*s->cache)[{p->bx, p->by}] = p;
@@ -270,8 +267,7 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
             if (m_poFilterGeom)
                 m_poFilterGeom->getEnvelope(&env);
             m_bComputed = true;
-            if (!m_poDS->GetBlocks(m_poFilterGeom ? &env : nullptr,
-                                   m_aoBlocks))
+            if (!m_poDS->GetBlocks(m_poFilterGeom ? &env : nullptr, m_aoBlocks))
                 return nullptr;
         }
         while (m_iBlock < m_aoBlocks.size() &&
@@ -287,8 +283,8 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
         const WMScene *s = m_poDS->m_poScene;
         auto poFeature = new OGRFeature(m_poDefn);
         /* stable FID: block's place in the scene grid, polygon index */
-        const GIntBig blk = (r->by - s->core.by0) * s->core.nbx +
-                            (r->bx - s->core.bx0);
+        const GIntBig blk =
+            (r->by - s->core.by0) * s->core.nbx + (r->bx - s->core.bx0);
         poFeature->SetFID((blk << 24) + static_cast<GIntBig>(p));
         poFeature->SetField(0, static_cast<int>(r->bx));
         poFeature->SetField(1, static_cast<int>(r->by));
@@ -363,8 +359,7 @@ int WaterMeshLayer::TestCapability(const char *pszCap)
 
 /* ------------------------------------------------------------------ */
 
-CPLErr WaterMeshBand::IReadBlock(int nBlockXOff, int nBlockYOff,
-                                 void *pImage)
+CPLErr WaterMeshBand::IReadBlock(int nBlockXOff, int nBlockYOff, void *pImage)
 {
     auto *ds = static_cast<WaterMeshDataset *>(poDS);
     const wm_scene &c = ds->m_poScene->core;
@@ -489,9 +484,11 @@ GDALDataset *WaterMeshDataset::Open(GDALOpenInfo *poOpenInfo)
         if ((poOpenInfo->nOpenFlags & GDAL_OF_RASTER) && scene->core.nbx > 0)
         {
             const double w = static_cast<double>(scene->core.nbx) *
-                                 scene->core.n + 1,
+                                 scene->core.n +
+                             1,
                          h = static_cast<double>(scene->core.nby) *
-                                 scene->core.n + 1;
+                                 scene->core.n +
+                             1;
             if (w > INT_MAX || h > INT_MAX)
             {
                 CPLError(CE_Failure, CPLE_AppDefined,
@@ -515,7 +512,7 @@ GDALDataset *WaterMeshDataset::Open(GDALOpenInfo *poOpenInfo)
     }
 }
 
-}  // namespace
+} // namespace
 
 static const char OPEN_OPTIONS[] =
     "<OpenOptionList>"
@@ -565,8 +562,9 @@ extern "C" void GDALRegister_WATERMESH()
     poDriver->SetDescription("WATERMESH");
     poDriver->SetMetadataItem(GDAL_DCAP_RASTER, "YES");
     poDriver->SetMetadataItem(GDAL_DCAP_VECTOR, "YES");
-    poDriver->SetMetadataItem(GDAL_DMD_LONGNAME,
-                              "Water mesh from rivers and lakes (watermesh " PACKAGE_VERSION ")");
+    poDriver->SetMetadataItem(
+        GDAL_DMD_LONGNAME,
+        "Water mesh from rivers and lakes (watermesh " PACKAGE_VERSION ")");
     poDriver->SetMetadataItem(GDAL_DMD_HELPTOPIC, "docs/driver.rst");
     poDriver->SetMetadataItem(GDAL_DMD_EXTENSIONS, "watermesh");
     poDriver->SetMetadataItem(GDAL_DMD_CONNECTION_PREFIX, "WATERMESH:");

@@ -32,8 +32,7 @@ const char *WMVersion(void)
 
 static OGRSpatialReferenceH layer_srs(OGRLayerH h)
 {
-    OGRSpatialReferenceH s = h ? OGR_L_GetSpatialRef(h) : NULL;
-    return s;
+    return h ? OGR_L_GetSpatialRef(h) : NULL;
 }
 
 static OGRSpatialReferenceH clone_trad(OGRSpatialReferenceH s)
@@ -105,7 +104,6 @@ static OGRSpatialReferenceH working_srs(OGRLayerH hRivers, OGRLayerH hLakes,
     if (l && OSRIsProjected(l))
         return clone_trad(l);
     /* geographic: UTM zone of the centre of the inputs' extents */
-    OGRSpatialReferenceH g = r ? r : l;
     double sx = 0, sy = 0;
     int n = 0;
     OGRLayerH hl[2] = {hRivers, hLakes};
@@ -133,7 +131,6 @@ static OGRSpatialReferenceH working_srs(OGRLayerH hRivers, OGRLayerH hLakes,
             OSRRelease(ll);
         }
     }
-    (void)g;
     if (n == 0)
     {
         CPLError(CE_Failure, CPLE_AppDefined,
@@ -156,6 +153,24 @@ static OGRSpatialReferenceH working_srs(OGRLayerH hRivers, OGRLayerH hLakes,
              "%d%c (EPSG:%d). Set TARGET_SRS to choose another CRS.",
              zone, lat >= 0 ? 'N' : 'S', epsg);
     return u;
+}
+
+/* The transformation from layer h's CRS to the working CRS dst, or NULL
+ * when none is needed (same CRS, or a layer without CRS, taken to be in
+ * dst). FALSE after GDAL's CPLError when it cannot be made. */
+static int to_working(OGRLayerH h, OGRSpatialReferenceH dst,
+                      OGRCoordinateTransformationH *ct)
+{
+    OGRSpatialReferenceH src = layer_srs(h);
+    *ct = NULL;
+    if (!src)
+        return TRUE;
+    OGRSpatialReferenceH s = clone_trad(src);
+    if (!OSRIsSame(s, dst))
+        *ct = OCTNewCoordinateTransformation(s, dst);
+    const int same = OSRIsSame(s, dst);
+    OSRRelease(s);
+    return same || *ct != NULL;
 }
 
 /* Growable arrays for the scene. */
@@ -282,19 +297,15 @@ static OGRGeometryH linear(OGRGeometryH g)
     return OGR_G_Clone(g);
 }
 
-static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
-                       double unit, OGRSpatialReferenceH dst,
-                       size_t *nvert, const char *path)
+static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
+                       OGRSpatialReferenceH dst, size_t *nvert)
 {
-    (void)path;
     feat_ctx fc = {"RIVERS", h, 0, unit, NULL};
-    OGRSpatialReferenceH src = layer_srs(h);
     int ok = TRUE, wfield = -1;
     size_t zero = 0, badw = 0;
     const OGRwkbGeometryType lt = wkbFlatten(OGR_L_GetGeomType(h));
     if (lt == wkbPoint || lt == wkbMultiPoint || lt == wkbPolygon ||
-        lt == wkbMultiPolygon || lt == wkbCurvePolygon ||
-        lt == wkbMultiSurface)
+        lt == wkbMultiPolygon || lt == wkbCurvePolygon || lt == wkbMultiSurface)
     {
         CPLError(CE_Failure, CPLE_AppDefined,
                  "WATERMESH: RIVERS layer '%s' has %s geometries; rivers "
@@ -314,15 +325,8 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
             return FALSE;
         }
     }
-    if (src && dst)
-    {
-        OGRSpatialReferenceH s = clone_trad(src);
-        if (!OSRIsSame(s, dst))
-            fc.ct = OCTNewCoordinateTransformation(s, dst);
-        OSRRelease(s);
-        if (!OSRIsSame(src, dst) && !fc.ct)
-            return FALSE;
-    }
+    if (!to_working(h, dst, &fc.ct))
+        return FALSE;
     OGR_L_ResetReading(h);
     OGRFeatureH f;
     while (ok && (f = OGR_L_GetNextFeature(h)) != NULL)
@@ -338,9 +342,8 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
         if (wfield >= 0)
         {
             double v;
-            const OGRFieldType ft =
-                OGR_Fld_GetType(OGR_FD_GetFieldDefn(OGR_L_GetLayerDefn(h),
-                                                    wfield));
+            const OGRFieldType ft = OGR_Fld_GetType(
+                OGR_FD_GetFieldDefn(OGR_L_GetLayerDefn(h), wfield));
             int good = FALSE;
             if (OGR_F_IsFieldSetAndNotNull(f, wfield))
             {
@@ -350,8 +353,7 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
                     good = isfinite(v) && v > 0 && v <= WM_MAX_WIDTH;
                 }
                 else
-                    good = parse_width(OGR_F_GetFieldAsString(f, wfield),
-                                       &v) &&
+                    good = parse_width(OGR_F_GetFieldAsString(f, wfield), &v) &&
                            v <= WM_MAX_WIDTH;
             }
             if (good)
@@ -375,7 +377,8 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
         size_t before = b->nsegs;
         for (int k = 0; ok && k < nparts; k++)
         {
-            OGRGeometryH part = t == wkbLineString ? g : OGR_G_GetGeometryRef(g, k);
+            OGRGeometryH part =
+                t == wkbLineString ? g : OGR_G_GetGeometryRef(g, k);
             if (wkbFlatten(OGR_G_GetGeometryType(part)) != wkbLineString)
             {
                 CPLError(CE_Failure, CPLE_AppDefined,
@@ -392,8 +395,8 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p,
                 ok = FALSE;
                 break;
             }
-            if (!reserve((void **)&b->segs, &b->segs_cap,
-                         b->nsegs + b->npts, sizeof *b->segs))
+            if (!reserve((void **)&b->segs, &b->segs_cap, b->nsegs + b->npts,
+                         sizeof *b->segs))
             {
                 ok = FALSE;
                 break;
@@ -474,7 +477,6 @@ static int read_lakes(builder *b, OGRLayerH h, double unit,
                       OGRSpatialReferenceH dst, size_t *nvert)
 {
     feat_ctx fc = {"LAKES", h, 0, unit, NULL};
-    OGRSpatialReferenceH src = layer_srs(h);
     int ok = TRUE;
     const OGRwkbGeometryType lt = wkbFlatten(OGR_L_GetGeomType(h));
     if (lt == wkbPoint || lt == wkbMultiPoint || lt == wkbLineString ||
@@ -487,15 +489,8 @@ static int read_lakes(builder *b, OGRLayerH h, double unit,
                  OGR_L_GetName(h), OGRGeometryTypeToName(lt));
         return FALSE;
     }
-    if (src && dst)
-    {
-        OGRSpatialReferenceH s = clone_trad(src);
-        if (!OSRIsSame(s, dst))
-            fc.ct = OCTNewCoordinateTransformation(s, dst);
-        OSRRelease(s);
-        if (!OSRIsSame(src, dst) && !fc.ct)
-            return FALSE;
-    }
+    if (!to_working(h, dst, &fc.ct))
+        return FALSE;
     OGR_L_ResetReading(h);
     OGRFeatureH f;
     while (ok && (f = OGR_L_GetNextFeature(h)) != NULL)
@@ -512,7 +507,8 @@ static int read_lakes(builder *b, OGRLayerH h, double unit,
         if (t == wkbPolygon)
         {
             for (int i = 0; i < OGR_G_GetGeometryCount(g); i++)
-                *nvert += (size_t)OGR_G_GetPointCount(OGR_G_GetGeometryRef(g, i));
+                *nvert +=
+                    (size_t)OGR_G_GetPointCount(OGR_G_GetGeometryRef(g, i));
             ok = read_polygon(b, g, &fc);
         }
         else if (t == wkbMultiPolygon || t == wkbGeometryCollection)
@@ -522,11 +518,12 @@ static int read_lakes(builder *b, OGRLayerH h, double unit,
                 OGRGeometryH part = OGR_G_GetGeometryRef(g, k);
                 if (wkbFlatten(OGR_G_GetGeometryType(part)) != wkbPolygon)
                 {
-                    CPLError(CE_Failure, CPLE_AppDefined,
-                             "WATERMESH: LAKES layer '%s', feature " CPL_FRMT_GIB
-                             ": a %s member; lakes must be polygons.",
-                             OGR_L_GetName(h), fc.fid,
-                             OGRGeometryTypeToName(OGR_G_GetGeometryType(part)));
+                    CPLError(
+                        CE_Failure, CPLE_AppDefined,
+                        "WATERMESH: LAKES layer '%s', feature " CPL_FRMT_GIB
+                        ": a %s member; lakes must be polygons.",
+                        OGR_L_GetName(h), fc.fid,
+                        OGRGeometryTypeToName(OGR_G_GetGeometryType(part)));
                     ok = FALSE;
                     break;
                 }
@@ -552,8 +549,7 @@ static int read_lakes(builder *b, OGRLayerH h, double unit,
     return ok;
 }
 
-WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes,
-                      CSLConstList opts)
+WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
 {
     builder b;
     memset(&b, 0, sizeof b);
@@ -572,7 +568,7 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes,
         goto fail;
     s->unit = s->params.pixel / WM_Q;
     if (hRivers && !read_rivers(&b, hRivers, &s->params, s->unit, s->hSRS,
-                                &s->core.river_vertices, NULL))
+                                &s->core.river_vertices))
         goto fail;
     if (hLakes &&
         !read_lakes(&b, hLakes, s->unit, s->hSRS, &s->core.lake_vertices))
@@ -644,10 +640,14 @@ int WMSceneBlocks(const WMScene *s, const double *spat, int64_t **blocks,
             f[i] = v < lo[i & 1] - 1 ? lo[i & 1] - 1
                                      : (v > hi[i & 1] + 1 ? hi[i & 1] + 1 : v);
         }
-        if ((int64_t)f[0] > x0) x0 = (int64_t)f[0];
-        if ((int64_t)f[1] > y0) y0 = (int64_t)f[1];
-        if ((int64_t)f[2] < x1) x1 = (int64_t)f[2];
-        if ((int64_t)f[3] < y1) y1 = (int64_t)f[3];
+        if ((int64_t)f[0] > x0)
+            x0 = (int64_t)f[0];
+        if ((int64_t)f[1] > y0)
+            y0 = (int64_t)f[1];
+        if ((int64_t)f[2] < x1)
+            x1 = (int64_t)f[2];
+        if ((int64_t)f[3] < y1)
+            y1 = (int64_t)f[3];
     }
     *blocks = NULL;
     *nblocks = 0;

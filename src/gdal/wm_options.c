@@ -16,10 +16,10 @@
 #include <string.h>
 
 const char *const WM_OPTION_NAMES[] = {
-    "RIVERS",     "RIVERS_LAYER", "RIVERS_WHERE", "LAKES",      "LAKES_LAYER",
-    "LAKES_WHERE", "WIDTH",       "WIDTH_FIELD",  "PIXEL_SIZE", "BLOCK_SIZE",
-    "SIMPLIFY",   "METHOD",       "DEVICE",       "NUM_THREADS", "TARGET_SRS",
-    NULL};
+    "RIVERS",      "RIVERS_LAYER", "RIVERS_WHERE", "LAKES",
+    "LAKES_LAYER", "LAKES_WHERE",  "WIDTH",        "WIDTH_FIELD",
+    "PIXEL_SIZE",  "BLOCK_SIZE",   "SIMPLIFY",     "METHOD",
+    "DEVICE",      "NUM_THREADS",  "TARGET_SRS",   NULL};
 
 /* Parses a strictly numeric option value; CPLError on failure. */
 static int number(CSLConstList opts, const char *name, double def, double *out)
@@ -178,8 +178,7 @@ static int params_parse(CSLConstList opts, WMParams *p)
         if (!ok || p->spat[0] > p->spat[2] || p->spat[1] > p->spat[3])
         {
             CPLError(CE_Failure, CPLE_IllegalArg,
-                     "WATERMESH: SPAT=%s: expected xmin,ymin,xmax,ymax.",
-                     spat);
+                     "WATERMESH: SPAT=%s: expected xmin,ymin,xmax,ymax.", spat);
             return FALSE;
         }
         p->have_spat = TRUE;
@@ -205,8 +204,8 @@ static int open_role(CSLConstList opts, const char *role, GDALDatasetH *phDS,
     *phLayer = NULL;
     if (!path || !*path)
         return TRUE;
-    *phDS = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_VERBOSE_ERROR, NULL,
-                       NULL, NULL);
+    *phDS = GDALOpenEx(path, GDAL_OF_VECTOR | GDAL_OF_VERBOSE_ERROR, NULL, NULL,
+                       NULL);
     if (!*phDS)
     {
         CPLError(CE_Failure, CPLE_OpenFailed,
@@ -227,8 +226,7 @@ static int open_role(CSLConstList opts, const char *role, GDALDatasetH *phDS,
                      path, lname);
         else
             CPLError(CE_Failure, CPLE_OpenFailed,
-                     "WATERMESH: %s datasource '%s' has no layer.", role,
-                     path);
+                     "WATERMESH: %s datasource '%s' has no layer.", role, path);
         GDALClose(*phDS);
         *phDS = NULL;
         return FALSE;
@@ -338,7 +336,7 @@ char **WMReadDescriptor(const char *pszPath)
         return NULL;
     }
     if (!opts)
-        CPLError(CE_Failure, CPLE_AppDefined,
-                 "WATERMESH: '%s' sets no option.", pszPath);
+        CPLError(CE_Failure, CPLE_AppDefined, "WATERMESH: '%s' sets no option.",
+                 pszPath);
     return opts;
 }

@@ -60,9 +60,9 @@ static void *worker(void *arg)
         wm_block_result res;
         char *msg = NULL;
         wm_ctx ctx = {collect_error, &msg};
-        const wm_status st = wm_block_run(&r->s->core, r->blocks[2 * i],
-                                          r->blocks[2 * i + 1], &r->opts,
-                                          &res, &ctx);
+        const wm_status st =
+            wm_block_run(&r->s->core, r->blocks[2 * i], r->blocks[2 * i + 1],
+                         &r->opts, &res, &ctx);
         pthread_mutex_lock(&r->mu);
         const size_t k = i % r->window;
         r->slot[k] = res;
@@ -223,8 +223,7 @@ OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
         for (int k = 0; k <= 3; k++)
         {
             double x, y;
-            world(s, r, r->rings.pts[r->tris[3 * t + (size_t)(k % 3)]], &x,
-                  &y);
+            world(s, r, r->rings.pts[r->tris[3 * t + (size_t)(k % 3)]], &x, &y);
             OGR_G_AddPoint_2D(ring, x, y);
         }
         OGR_G_AddGeometryDirectly(tri, ring);
@@ -335,8 +334,7 @@ CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
     {
         gen_sink g = {s, hWater, hMesh};
         WMRunStats st;
-        err = WMRunBlocks(s, blocks, nblocks, write_block, &g, pfn, pArg,
-                          &st);
+        err = WMRunBlocks(s, blocks, nblocks, write_block, &g, pfn, pArg, &st);
         if (err == CE_None && s->params.stats)
             WMPrintStats(s, &st);
     }
