@@ -2,6 +2,7 @@
  * closing along the block square, and the wm_rings invariants. */
 #include "contour.h"
 #include "lattice.h"
+#include "ring_check.h"
 #include "tap.h"
 
 #include <stdlib.h>
@@ -52,20 +53,7 @@ static int check_rings(const wm_rings *r, int32_t S)
         }
     }
     /* no two non-adjacent edges meet, anywhere */
-    for (size_t i = 0; i < r->nrings; i++)
-        for (size_t j = i; j < r->nrings; j++)
-        {
-            const size_t ni = wm_rings_len(r, i), nj = wm_rings_len(r, j);
-            const wm_pt *p = r->pts + r->start[i], *q = r->pts + r->start[j];
-            for (size_t a = 0; a < ni; a++)
-                for (size_t b = (i == j ? a + 1 : 0); b < nj; b++)
-                {
-                    if (i == j && (b == a + 1 || (a == 0 && b == ni - 1)))
-                        continue;
-                    bad += wm_segments_meet(p[a], p[(a + 1) % ni], q[b],
-                                            q[(b + 1) % nj]);
-                }
-        }
+    bad += ring_meetings(r);
     return bad;
 }
 

@@ -310,7 +310,7 @@ typedef struct
 {
     const wm_rings *r;
     int32_t side;    /* cells per side */
-    uint32_t *start; /* side*side + 1 */
+    size_t *start;   /* side*side + 1 */
     uint32_t *edges; /* edge k = from vertex k to its successor */
     size_t *ring_of; /* vertex -> ring */
 } ringgrid;
@@ -345,9 +345,9 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S)
     for (size_t ri = 0; ri < r->nrings; ri++)
         for (size_t k = r->start[ri]; k < r->start[ri + 1]; k++)
             g->ring_of[k] = ri;
-    if (r->npts >= UINT32_MAX / 4)
+    if (r->npts >= UINT32_MAX)
         return WM_ERR_NOMEM;
-    uint32_t *cur = NULL;
+    size_t *cur = NULL;
     for (int pass = 0; pass < 2; pass++)
     {
         for (size_t k = 0; k < r->npts; k++)
@@ -369,16 +369,13 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S)
         }
         if (pass == 0)
         {
-            for (size_t c = 0; c < ncell; c++)
-                g->start[c + 1] += g->start[c];
+            cur = wm_csr_begin(g->start, ncell);
             g->edges = malloc((g->start[ncell] + 1) * sizeof *g->edges);
-            cur = malloc((ncell + 1) * sizeof *cur);
             if (!g->edges || !cur)
             {
                 free(cur);
                 return WM_ERR_NOMEM;
             }
-            memcpy(cur, g->start, ncell * sizeof *cur);
         }
     }
     free(cur);
@@ -404,7 +401,7 @@ static int visit_edges(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
         for (int32_t cx = cx0; cx <= cx1; cx++)
         {
             const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
-            for (uint32_t i = g->start[c]; i < g->start[c + 1]; i++)
+            for (size_t i = g->start[c]; i < g->start[c + 1]; i++)
                 if (!fn(arg, g->edges[i]))
                     return 0;
         }

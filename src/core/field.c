@@ -190,28 +190,18 @@ static wm_status bin_items(work *w)
         size_t *cs = w->tseg_start + 1, *ce = w->tedge_start + 1;
         if (pass == 1)
         {
-            for (size_t t = 0; t < nt; t++)
-            {
-                w->tseg_start[t + 1] += w->tseg_start[t];
-                w->tedge_start[t + 1] += w->tedge_start[t];
-            }
+            cs = wm_csr_begin(w->tseg_start, nt);
+            ce = wm_csr_begin(w->tedge_start, nt);
             w->tseg = malloc((w->tseg_start[nt] + 1) * sizeof *w->tseg);
             w->tedge = malloc((w->tedge_start[nt] + 1) * sizeof *w->tedge);
             w->tedge_poly =
                 malloc((w->tedge_start[nt] + 1) * sizeof *w->tedge_poly);
-            if (!w->tseg || !w->tedge || !w->tedge_poly)
-                return WM_ERR_NOMEM;
-            /* reuse the counts as fill cursors: shift starts */
-            cs = malloc((nt + 1) * sizeof *cs);
-            ce = malloc((nt + 1) * sizeof *ce);
-            if (!cs || !ce)
+            if (!cs || !ce || !w->tseg || !w->tedge || !w->tedge_poly)
             {
                 free(cs);
                 free(ce);
                 return WM_ERR_NOMEM;
             }
-            memcpy(cs, w->tseg_start, nt * sizeof *cs);
-            memcpy(ce, w->tedge_start, nt * sizeof *ce);
         }
         for (size_t i = 0; i < w->nsegs; i++)
         {
@@ -307,16 +297,13 @@ static wm_status bin_polys(work *w)
         }
         if (pass == 0)
         {
-            for (size_t t = 0; t < nt; t++)
-                w->tpoly_start[t + 1] += w->tpoly_start[t];
+            cur = wm_csr_begin(w->tpoly_start, nt);
             w->tpoly = malloc((w->tpoly_start[nt] + 1) * sizeof *w->tpoly);
-            cur = malloc((nt + 1) * sizeof *cur);
             if (!w->tpoly || !cur)
             {
                 free(cur);
                 return WM_ERR_NOMEM;
             }
-            memcpy(cur, w->tpoly_start, nt * sizeof *cur);
         }
     }
     free(cur);
@@ -358,16 +345,13 @@ static wm_status build_crossings(work *w)
     {
         if (pass == 1)
         {
-            for (size_t k = 0; k < nkeys; k++)
-                w->tog_start[k + 1] += w->tog_start[k];
+            cursor = wm_csr_begin(w->tog_start, nkeys);
             w->tog = malloc((w->tog_start[nkeys] + 1) * sizeof *w->tog);
-            cursor = malloc((nkeys + 1) * sizeof *cursor);
             if (!w->tog || !cursor)
             {
                 free(cursor);
                 return WM_ERR_NOMEM;
             }
-            memcpy(cursor, w->tog_start, nkeys * sizeof *cursor);
         }
         for (size_t k = 0; k < w->npolys; k++)
         {

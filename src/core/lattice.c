@@ -22,6 +22,16 @@ wm_status wm_fail(const wm_ctx *ctx, wm_status status, const char *fmt, ...)
     return status;
 }
 
+size_t *wm_csr_begin(size_t *start, size_t nrows)
+{
+    for (size_t k = 0; k < nrows; k++)
+        start[k + 1] += start[k];
+    size_t *cursor = malloc((nrows + 1) * sizeof *cursor);
+    if (cursor)
+        memcpy(cursor, start, (nrows + 1) * sizeof *cursor);
+    return cursor;
+}
+
 void wm_rings_clear(wm_rings *r)
 {
     r->npts = 0;

@@ -95,13 +95,10 @@ static wm_status build_csr(wm_scene *s, int polys, size_t **start_out,
         }
         if (pass == 0)
         {
-            for (size_t k = 0; k < nblk; k++)
-                start[k + 1] += start[k];
+            pos = wm_csr_begin(start, nblk);
             items = malloc((start[nblk] ? start[nblk] : 1) * sizeof *items);
-            pos = malloc((nblk ? nblk : 1) * sizeof *pos);
             if (!items || !pos)
                 goto nomem;
-            memcpy(pos, start, nblk * sizeof *pos);
             st.pos = pos;
             st.out = items;
         }

@@ -85,6 +85,18 @@ extern "C"
     wm_status wm_rings_push(wm_rings *r, wm_pt p);
     /** Closes the ring being built (the points pushed since the last close). */
     wm_status wm_rings_close(wm_rings *r);
+    /**
+     * Compressed sparse rows built in two passes over the same items (the
+     * pattern of every spatial index here): pass 1 counts, start[row + 1]++;
+     * then wm_csr_begin turns the counts of start (nrows + 1 entries, start[0]
+     * == 0) into offsets, start[nrows] being the total, and returns one fill
+     * cursor per row; pass 2 writes items[cursor[row]++].
+     *
+     * @return the cursors (caller frees with free()), or NULL when out of
+     *         memory
+     */
+    size_t *wm_csr_begin(size_t *start, size_t nrows);
+
     /** Number of vertices of ring i. */
     static inline size_t wm_rings_len(const wm_rings *r, size_t i)
     {
