@@ -131,8 +131,9 @@ int main(void)
                     if (wm_block_run(&s, bx, by, &opts[o], &r2, NULL) == WM_OK)
                     {
                         det += r2.rings.npts != r.rings.npts ||
-                               memcmp(r2.rings.pts, r.rings.pts,
-                                      r.rings.npts * sizeof(wm_pt)) != 0;
+                               (r.rings.npts > 0 &&
+                                memcmp(r2.rings.pts, r.rings.pts,
+                                       r.rings.npts * sizeof(wm_pt)) != 0);
                         wm_block_result_free(&r2);
                     }
                     /* the shared edge with the right neighbour */
