@@ -51,52 +51,44 @@ static wm_status group(const wm_rings *in, const int32_t *enc,
                        wm_block_result *res, const wm_ctx *ctx)
 {
     const size_t nr = in->nrings;
-    size_t *hstart = calloc(nr + 1, sizeof *hstart), *hole = NULL;
-    size_t *cur = NULL;
     wm_status st = WM_OK;
-    if (!hstart)
-        return WM_ERR_NOMEM;
+    uint8_t *outer = malloc(nr + 1);
+    size_t *hstart = calloc(nr + 1, sizeof *hstart), *cur = NULL;
+    size_t *hole = NULL;
     size_t nouter = 0;
+    if (!outer || !hstart)
+        goto nomem;
+    for (size_t i = 0; i < nr; i++)
+        outer[i] =
+            wm_ring_area2(in->pts + in->start[i], wm_rings_len(in, i)) > 0;
+    /* nesting alternates: an outer ring lies in nothing or in a hole, a
+     * hole in an outer ring */
     for (size_t i = 0; i < nr; i++)
     {
-        const int outer =
-            wm_ring_area2(in->pts + in->start[i], wm_rings_len(in, i)) > 0;
-        if (outer)
+        if (outer[i] ? (enc[i] >= 0 && outer[enc[i]])
+                     : (enc[i] < 0 || !outer[enc[i]]))
         {
-            nouter++;
-            if (enc[i] >= 0 &&
-                wm_ring_area2(in->pts + in->start[enc[i]],
-                              wm_rings_len(in, (size_t)enc[i])) > 0)
-                st = WM_ERR_INTERNAL;
+            st = wm_fail(ctx, WM_ERR_INTERNAL,
+                         "ring nesting does not alternate");
+            goto cleanup;
         }
-        else if (enc[i] < 0 ||
-                 wm_ring_area2(in->pts + in->start[enc[i]],
-                               wm_rings_len(in, (size_t)enc[i])) < 0)
-            st = WM_ERR_INTERNAL;
+        if (outer[i])
+            nouter++;
         else
             hstart[enc[i] + 1]++;
     }
-    if (st != WM_OK)
-    {
-        free(hstart);
-        return wm_fail(ctx, st, "ring nesting does not alternate");
-    }
-    for (size_t i = 0; i < nr; i++)
-        hstart[i + 1] += hstart[i];
+    cur = wm_csr_begin(hstart, nr);
     hole = malloc((hstart[nr] + 1) * sizeof *hole);
-    cur = malloc((nr + 1) * sizeof *cur);
     res->poly_ring = malloc((nouter + 1) * sizeof *res->poly_ring);
-    if (!hole || !cur || !res->poly_ring)
+    if (!cur || !hole || !res->poly_ring)
         goto nomem;
-    memcpy(cur, hstart, nr * sizeof *cur);
     for (size_t i = 0; i < nr; i++)
-        if (enc[i] >= 0 &&
-            wm_ring_area2(in->pts + in->start[i], wm_rings_len(in, i)) < 0)
+        if (!outer[i])
             hole[cur[enc[i]]++] = i;
     res->npolys = 0;
     for (size_t i = 0; i < nr; i++)
     {
-        if (wm_ring_area2(in->pts + in->start[i], wm_rings_len(in, i)) < 0)
+        if (!outer[i])
             continue;
         res->poly_ring[res->npolys++] = res->rings.nrings;
         if (copy_ring(in, i, &res->rings) != WM_OK)
@@ -110,9 +102,10 @@ static wm_status group(const wm_rings *in, const int32_t *enc,
 nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory grouping polygons");
 cleanup:
+    free(outer);
     free(hstart);
-    free(hole);
     free(cur);
+    free(hole);
     return st;
 }
 
