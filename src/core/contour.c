@@ -57,7 +57,6 @@ typedef struct
 
 typedef struct
 {
-    const wm_field *f;
     int32_t n; /* cells per side */
     seg *segs;
     size_t nsegs, cap;
@@ -72,7 +71,8 @@ static uint64_t edge_id(int32_t n, int32_t c, int32_t r, int vertical)
 }
 
 /* Crossing on the edge from sample a (value va) to sample b (value vb),
- * which differ in class; (x, y) lattice of a; dx/dy unit step to b. */
+ * which differ in class; (x, y) lattice of a; b is one sample to the right
+ * (vertical == 0) or above (vertical == 1). */
 static wm_pt crossing(float va, float vb, int32_t x, int32_t y, int vertical)
 {
     const double t = (double)va / ((double)va - (double)vb);
@@ -200,7 +200,7 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                              const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
-    state s = {f, f->w - 1, NULL, 0, 0};
+    state s = {f->w - 1, NULL, 0, 0};
     size_t *slot = NULL, *next = NULL;
     uint8_t *used = NULL, *haspred = NULL;
     entry *ent = NULL;
