@@ -452,7 +452,7 @@ static int check_fn(void *arg, size_t k)
     if (k == ck->ka)
         return 1; /* the edge being split */
     /* a ring vertex in the closed triangle (a, c, b), other than a, b */
-    if (k != ck->ka && k != ck->kb)
+    if (k != ck->kb)
     {
         const int o1 = wm_orient(ck->a, ck->c, p),
                   o2 = wm_orient(ck->c, ck->b, p);
@@ -474,9 +474,8 @@ static int check_fn(void *arg, size_t k)
             /* adjacent edge: may share only the common vertex */
             const wm_pt other = shares_a ? p : q;
             const wm_pt common = shares_a ? ck->a : ck->b;
-            const wm_pt far = shares_a ? ck->c : ck->c;
-            if (wm_on_segment(common, far, other) ||
-                wm_on_segment(common, other, far))
+            if (wm_on_segment(common, ck->c, other) ||
+                wm_on_segment(common, other, ck->c))
             {
                 ck->ok = 0;
                 return 0;

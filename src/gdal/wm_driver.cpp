@@ -374,13 +374,7 @@ CPLErr WaterMeshBand::IReadBlock(int nBlockXOff, int nBlockYOff, void *pImage)
         out[i] = band;
     wm_field f;
     char *msg = nullptr;
-    auto collect = [](void *user, wm_status, const char *m)
-    {
-        char **dst = static_cast<char **>(user);
-        if (!*dst)
-            *dst = CPLStrdup(m);
-    };
-    wm_ctx ctx = {collect, &msg};
+    wm_ctx ctx = {WMKeepFirstError, &msg};
     if (wm_field_compute(&c, gx0, gytop - hc + 1, wc, hc, &f, &ctx) != WM_OK)
     {
         CPLError(CE_Failure, CPLE_AppDefined, "WATERMESH: %s",
@@ -483,12 +477,10 @@ GDALDataset *WaterMeshDataset::Open(GDALOpenInfo *poOpenInfo)
         }
         if ((poOpenInfo->nOpenFlags & GDAL_OF_RASTER) && scene->core.nbx > 0)
         {
-            const double w = static_cast<double>(scene->core.nbx) *
-                                 scene->core.n +
-                             1,
-                         h = static_cast<double>(scene->core.nby) *
-                                 scene->core.n +
-                             1;
+            /* samples: N per block plus the last shared border */
+            const double n = scene->core.n;
+            const double w = static_cast<double>(scene->core.nbx) * n + 1;
+            const double h = static_cast<double>(scene->core.nby) * n + 1;
             if (w > INT_MAX || h > INT_MAX)
             {
                 CPLError(CE_Failure, CPLE_AppDefined,

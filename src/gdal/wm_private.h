@@ -93,6 +93,10 @@ typedef struct
     uint64_t pairs;
 } WMRunStats;
 
+/** A wm_error_fn keeping the first message in *(char **)user (CPLStrdup'ed;
+ *  the caller frees it with CPLFree). */
+void WMKeepFirstError(void *user, wm_status status, const char *msg);
+
 /** Runs blocks on num_threads threads, at most a few per thread in flight,
  *  handing results to sink in order. CE_Failure after a CPLError. */
 CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,

@@ -35,9 +35,9 @@ typedef struct
     char **msg;            /* per slot: error text */
 } runner;
 
-static void collect_error(void *user, wm_status st, const char *msg)
+void WMKeepFirstError(void *user, wm_status status, const char *msg)
 {
-    (void)st;
+    (void)status;
     char **dst = user;
     if (!*dst)
         *dst = CPLStrdup(msg);
@@ -59,7 +59,7 @@ static void *worker(void *arg)
 
         wm_block_result res;
         char *msg = NULL;
-        wm_ctx ctx = {collect_error, &msg};
+        wm_ctx ctx = {WMKeepFirstError, &msg};
         const wm_status st =
             wm_block_run(&r->s->core, r->blocks[2 * i], r->blocks[2 * i + 1],
                          &r->opts, &res, &ctx);
