@@ -69,7 +69,7 @@ int main(void)
         wedge(angles[k], &cx, &cy, &s);
         wm_field f;
         wm_rings r = {0};
-        wm_field_compute(&s, 0, 0, 257, 257, &f, NULL);
+        wm_field_compute(&s, 0, 0, 257, 257, NULL, &f, NULL);
         TAP_EQ(wm_contour_extract(&f, &r, NULL), WM_OK, "extract %g deg",
                angles[k]);
         const double before = nearest_edge(&r, cx, cy) / WM_Q;
@@ -98,7 +98,7 @@ int main(void)
         su_finish(&s);
         wm_field f;
         wm_rings r = {0}, r0 = {0};
-        wm_field_compute(&s, 0, 0, 65, 65, &f, NULL);
+        wm_field_compute(&s, 0, 0, 65, 65, NULL, &f, NULL);
         wm_contour_extract(&f, &r, NULL);
         wm_contour_extract(&f, &r0, NULL);
         wm_crease_recover(&s, &f, 0, 0, &r, NULL);

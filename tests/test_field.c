@@ -31,9 +31,9 @@ int main(void)
     su_finish(&s);
 
     wm_field a, b, w;
-    TAP_EQ(wm_field_compute(&s, 0, 0, 65, 129, &a, NULL), WM_OK,
+    TAP_EQ(wm_field_compute(&s, 0, 0, 65, 129, NULL, &a, NULL), WM_OK,
            "field of block column 0");
-    TAP_EQ(wm_field_compute(&s, 64, 0, 65, 129, &b, NULL), WM_OK,
+    TAP_EQ(wm_field_compute(&s, 64, 0, 65, 129, NULL, &b, NULL), WM_OK,
            "field of block column 1");
     int diff = 0;
     for (int r = 0; r < 129; r++)
@@ -41,7 +41,8 @@ int main(void)
     TAP_EQ(diff, 0, "shared border column bit-identical in both blocks");
 
     /* an odd window: every sample equal to the block's value */
-    TAP_EQ(wm_field_compute(&s, 37, 11, 53, 77, &w, NULL), WM_OK, "odd window");
+    TAP_EQ(wm_field_compute(&s, 37, 11, 53, 77, NULL, &w, NULL), WM_OK,
+           "odd window");
     diff = 0;
     for (int r = 0; r < 77; r++)
         for (int c = 0; c < 53; c++)
@@ -87,7 +88,7 @@ int main(void)
     }
     {
         wm_field g;
-        wm_field_compute(&s, 0, 0, 257, 257, &g, NULL);
+        wm_field_compute(&s, 0, 0, 257, 257, NULL, &g, NULL);
         TAP_OK(g.mixed > 0 && g.mixed < (size_t)g.ntx * (size_t)g.nty,
                "tiles away from the shore are uniform (%zu of %d mixed)",
                g.mixed, g.ntx * g.nty);
@@ -104,7 +105,7 @@ int main(void)
     su_lake(&big, sq, bc, 1);
     su_finish(&big);
     wm_field f;
-    TAP_EQ(wm_field_compute(&big, 0, 0, 257, 257, &f, NULL), WM_OK,
+    TAP_EQ(wm_field_compute(&big, 0, 0, 257, 257, NULL, &f, NULL), WM_OK,
            "deep lake block");
     TAP_EQ(f.mixed, 0, "deep inside a lake: no mixed tile");
     TAP_OK(wm_field_at(&f, 100, 100) == -2.0f, "deep inside: -band");

@@ -156,12 +156,35 @@ static wm_status triangulate(wm_block_result *res, const wm_ctx *ctx)
     return st;
 }
 
+wm_status wm_block_field(const wm_scene *s, int64_t bx, int64_t by,
+                         const wm_block_opts *opts, wm_field *f,
+                         const wm_ctx *ctx)
+{
+    return wm_field_compute(s, bx * s->n, by * s->n, s->n + 1, s->n + 1,
+                            opts->dev, f, ctx);
+}
+
 wm_status wm_block_run(const wm_scene *s, int64_t bx, int64_t by,
                        const wm_block_opts *opts, wm_block_result *res,
                        const wm_ctx *ctx)
 {
-    wm_status st;
     wm_field f;
+    memset(res, 0, sizeof *res);
+    const double t0 = wm_now();
+    wm_status st = wm_block_field(s, bx, by, opts, &f, ctx);
+    if (st != WM_OK)
+        return st;
+    const double t1 = wm_now();
+    st = wm_block_finish(s, bx, by, &f, opts, res, ctx);
+    res->seconds[WM_STAGE_FIELD] = t1 - t0;
+    return st;
+}
+
+wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
+                          wm_field *f, const wm_block_opts *opts,
+                          wm_block_result *res, const wm_ctx *ctx)
+{
+    wm_status st;
     wm_rings raw, simp;
     int32_t *enc = NULL;
     memset(res, 0, sizeof *res);
@@ -169,19 +192,14 @@ wm_status wm_block_run(const wm_scene *s, int64_t bx, int64_t by,
     memset(&simp, 0, sizeof simp);
     res->bx = bx;
     res->by = by;
+    res->mixed_tiles = f->mixed;
+    res->pairs = f->pairs;
 
-    double t0 = wm_now();
-    st = wm_field_compute(s, bx * s->n, by * s->n, s->n + 1, s->n + 1, &f, ctx);
-    if (st != WM_OK)
-        return st;
-    res->mixed_tiles = f.mixed;
-    res->pairs = f.pairs;
-    double t1 = wm_now();
-    res->seconds[WM_STAGE_FIELD] = t1 - t0;
-    st = wm_contour_extract(&f, &raw, ctx);
+    const double t1 = wm_now();
+    st = wm_contour_extract(f, &raw, ctx);
     if (st == WM_OK)
-        st = wm_crease_recover(s, &f, bx, by, &raw, ctx);
-    wm_field_free(&f);
+        st = wm_crease_recover(s, f, bx, by, &raw, ctx);
+    wm_field_free(f);
     double t2 = wm_now();
     res->seconds[WM_STAGE_EXTRACT] = t2 - t1;
     if (st != WM_OK)

@@ -5,6 +5,7 @@
 #ifndef WM_BLOCK_H
 #define WM_BLOCK_H
 
+#include "field.h"
 #include "scene.h"
 
 #ifdef __cplusplus
@@ -28,6 +29,7 @@ extern "C"
     {
         double simplify; /**< Douglas-Peucker tolerance, lattice units; 0 off */
         int triangulate; /**< 0: polygons only */
+        const wm_field_device *dev; /**< evaluates the field; NULL: C path */
     } wm_block_opts;
 
     /**
@@ -52,10 +54,23 @@ extern "C"
     } wm_block_result;
 
     /** Runs block (bx, by); `res` is overwritten (free with
-     *  wm_block_result_free()). */
+     *  wm_block_result_free()). Same as wm_block_field + wm_block_finish. */
     wm_status wm_block_run(const wm_scene *s, int64_t bx, int64_t by,
                            const wm_block_opts *opts, wm_block_result *res,
                            const wm_ctx *ctx);
+
+    /** The first stage alone: the field of block (bx, by) (free it with
+     *  wm_field_free(), or hand it to wm_block_finish). A runner computes
+     *  the next block's field on a device while the CPU finishes this one. */
+    wm_status wm_block_field(const wm_scene *s, int64_t bx, int64_t by,
+                             const wm_block_opts *opts, wm_field *f,
+                             const wm_ctx *ctx);
+
+    /** The other stages of block (bx, by) from its field, which it frees.
+     *  `res` is overwritten; its field time is left 0 for the caller. */
+    wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
+                              wm_field *f, const wm_block_opts *opts,
+                              wm_block_result *res, const wm_ctx *ctx);
 
     void wm_block_result_free(wm_block_result *res);
 

@@ -419,22 +419,30 @@ static size_t row_key(const work *w, size_t k, int32_t r)
     return w->key0[k] + (size_t)(r - w->row0[k]);
 }
 
-/* Even-odd parity of local polygon k at window sample (c, r). */
-static int inside_at(const work *w, size_t k, int32_t c, int32_t r)
+/* Parity bits of local polygon k along window row r, tile columns c0 ..
+ * c0 + WM_TILE: bit q is the parity at column c0 + q. Rows outside the
+ * polygon's box (and so outside the window) are all zero. */
+static uint64_t parity_row(const work *w, size_t k, int32_t r, int32_t c0)
 {
     const size_t key = row_key(w, k, r);
     if (key == SIZE_MAX)
         return 0;
-    int in = w->base[key];
-    for (size_t i = w->tog_start[key]; i < w->tog_start[key + 1]; i++)
-        if (w->tog[i] <= c)
+    uint64_t in = w->base[key], m = 0;
+    size_t ti = w->tog_start[key];
+    const size_t te = w->tog_start[key + 1];
+    for (int32_t q = 0; q < WM_TS1; q++)
+    {
+        while (ti < te && w->tog[ti] <= c0 + q)
+        {
             in ^= 1;
-        else
-            break;
-    return in;
+            ti++;
+        }
+        m |= in << q;
+    }
+    return m;
 }
 
-#define TS1 (WM_TILE + 1)
+#define TS1 WM_TS1
 
 /* Vector builds of the per-tile loops: the same IEEE operations (no
  * contraction, no fast-math) in wider lanes, so every clone gives the same
@@ -496,23 +504,69 @@ static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
         du2[j] = d2[j] < du2[j] ? d2[j] : du2[j];
 }
 
-static wm_status compute_tile(work *w, int32_t tx, int32_t ty, uint8_t *haspoly)
+/* v = min(v, +/- sqrt(du2)) over a full tile, the sign - where the
+ * polygon's parity bit is set (multiplying by +/-1 is exact). */
+WM_CLONES
+static void lake_min(const double *du2, const uint64_t *mask, double *v)
+{
+    for (int32_t j = 0; j < TS1; j++)
+    {
+        const uint64_t m = mask[j];
+        for (int32_t q = 0; q < TS1; q++)
+        {
+            const double sign = 1.0 - 2.0 * (double)((m >> q) & 1);
+            const double d = sign * sqrt(du2[j * TS1 + q]);
+            v[j * TS1 + q] = d < v[j * TS1 + q] ? d : v[j * TS1 + q];
+        }
+    }
+}
+
+wm_status wm_field_eval_c(void *user, const wm_field_batch *b,
+                          const wm_ctx *ctx)
+{
+    (void)user;
+    (void)ctx;
+    const wm_scene *s = b->s;
+    const double bandl = (double)s->band * WM_Q;
+    double v[TS1 * TS1], d2[TS1 * TS1], du2[TS1 * TS1];
+    for (size_t k = 0; k < b->ntiles; k++)
+    {
+        const int64_t X = b->org[2 * k], Y = b->org[2 * k + 1];
+        for (int32_t i = 0; i < TS1 * TS1; i++)
+            v[i] = bandl;
+        for (size_t i = b->seg_start[k]; i < b->seg_start[k + 1]; i++)
+            river_min(&s->segs[b->seg[i]], X, Y, v, d2);
+        for (size_t g = b->grp_start[k]; g < b->grp_start[k + 1]; g++)
+        {
+            for (int32_t j = 0; j < TS1 * TS1; j++)
+                du2[j] = INFINITY;
+            for (size_t i = b->edge_start[g]; i < b->edge_start[g + 1]; i++)
+                edge_min2(&s->edges[b->edge[i]], X, Y, du2, d2);
+            lake_min(du2, b->mask + g * TS1, v);
+        }
+        float *out = b->val + k * TS1 * TS1;
+        for (int32_t j = 0; j < TS1 * TS1; j++)
+        {
+            const double d = v[j] < -bandl ? -bandl : v[j];
+            out[j] = (float)(d / WM_Q);
+        }
+    }
+    return WM_OK;
+}
+
+/* Tile (tx, ty) is uniform when nothing is in reach, or when a gathered
+ * polygon without edges in reach contains it: then its kind is set and 1
+ * returned. Otherwise its samples need evaluating: 0. */
+static int uniform_tile(work *w, int32_t tx, int32_t ty, uint8_t *haspoly)
 {
     const wm_scene *s = w->s;
     wm_field *f = w->f;
     const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
-    const int32_t c0 = tx * WM_TILE, r0 = ty * WM_TILE;
-    const int32_t c1 = c0 + WM_TILE < f->w - 1 ? c0 + WM_TILE : f->w - 1;
-    const int32_t r1 = r0 + WM_TILE < f->h - 1 ? r0 + WM_TILE : f->h - 1;
-    const int32_t nx = c1 - c0 + 1, ny = r1 - r0 + 1;
-    const size_t s0 = w->tseg_start[t], s1 = w->tseg_start[t + 1];
     const size_t e0 = w->tedge_start[t], e1 = w->tedge_start[t + 1];
-
-    /* polygons with edges in reach are evaluated per sample; any other
-     * gathered polygon containing the tile makes it uniform water */
     for (size_t i = e0; i < e1; i++)
         haspoly[w->tedge_poly[i]] = 1;
     int water = 0;
+    const int32_t c0 = tx * WM_TILE, r0 = ty * WM_TILE;
     const int64_t X = w->X0 + (int64_t)c0 * WM_Q,
                   Y = w->Y0 + (int64_t)r0 * WM_Q;
     for (size_t i = w->tpoly_start[t]; i < w->tpoly_start[t + 1] && !water; i++)
@@ -520,60 +574,142 @@ static wm_status compute_tile(work *w, int32_t tx, int32_t ty, uint8_t *haspoly)
         const size_t k = w->tpoly[i];
         const wm_box b = s->poly_box[w->polys[k]];
         if (!haspoly[k] && X >= b.x0 && X <= b.x1 && Y >= b.y0 && Y <= b.y1 &&
-            inside_at(w, k, c0, r0))
+            (parity_row(w, k, r0, c0) & 1))
             water = 1;
     }
     for (size_t i = e0; i < e1; i++)
         haspoly[w->tedge_poly[i]] = 0;
-    if (water || (s0 == s1 && e0 == e1))
+    if (water || (w->tseg_start[t] == w->tseg_start[t + 1] && e0 == e1))
     {
         f->kind[t] = (uint8_t)(water ? WM_TILE_WATER : WM_TILE_LAND);
-        return WM_OK;
+        return 1;
     }
+    return 0;
+}
 
-    const double bandl = (double)s->band * WM_Q;
-    double v[TS1 * TS1], d2[TS1 * TS1], du2[TS1 * TS1];
-    for (int32_t i = 0; i < TS1 * TS1; i++)
-        v[i] = bandl;
-    for (size_t i = s0; i < s1; i++)
-        river_min(&s->segs[w->tseg[i]], X, Y, v, d2);
-    for (size_t i = e0; i < e1;)
+/* Grows *p to hold n elements of `size` bytes; 0 when out of memory. */
+static int reserve(void *p, size_t *cap, size_t n, size_t size)
+{
+    if (n <= *cap)
+        return 1;
+    size_t c = *cap ? *cap : 64;
+    while (c < n)
+        c *= 2;
+    void *q = realloc(*(void **)p, c * size);
+    if (!q)
+        return 0;
+    *(void **)p = q;
+    *cap = c;
+    return 1;
+}
+
+/* A batch under assembly: the arrays behind a wm_field_batch, reused from
+ * one batch to the next. */
+typedef struct
+{
+    int64_t *org;
+    size_t *seg_start, *grp_start, *edge_start;
+    uint32_t *seg, *edge;
+    uint64_t *mask;
+    float *val;
+    size_t cap_seg, cap_edge, cap_mask, cap_grp;
+} batch_buf;
+
+static void batch_buf_free(batch_buf *bb)
+{
+    free(bb->org);
+    free(bb->seg_start);
+    free(bb->grp_start);
+    free(bb->edge_start);
+    free(bb->seg);
+    free(bb->edge);
+    free(bb->mask);
+    free(bb->val);
+}
+
+/* Fills the batch of window tiles tiles[0 .. n-1]. */
+static wm_status build_batch(const work *w, const size_t *tiles, size_t n,
+                             batch_buf *bb, wm_field_batch *b)
+{
+    const wm_field *f = w->f;
+    size_t nseg = 0, ngrp = 0, nedge = 0;
+    if (!reserve(&bb->edge_start, &bb->cap_grp, 1, sizeof *bb->edge_start))
+        return WM_ERR_NOMEM;
+    bb->seg_start[0] = bb->grp_start[0] = bb->edge_start[0] = 0;
+    for (size_t k = 0; k < n; k++)
     {
-        const uint32_t k = w->tedge_poly[i];
-        for (int32_t j = 0; j < TS1 * TS1; j++)
-            du2[j] = INFINITY;
-        for (; i < e1 && w->tedge_poly[i] == k; i++)
-            edge_min2(&s->edges[w->tedge[i]], X, Y, du2, d2);
-        for (int32_t j = 0; j < ny; j++)
+        const size_t t = tiles[k];
+        const int32_t c0 = (int32_t)(t % (size_t)f->ntx) * WM_TILE;
+        const int32_t r0 = (int32_t)(t / (size_t)f->ntx) * WM_TILE;
+        bb->org[2 * k] = w->X0 + (int64_t)c0 * WM_Q;
+        bb->org[2 * k + 1] = w->Y0 + (int64_t)r0 * WM_Q;
+        const size_t s0 = w->tseg_start[t], s1 = w->tseg_start[t + 1];
+        if (!reserve(&bb->seg, &bb->cap_seg, nseg + (s1 - s0), sizeof *bb->seg))
+            return WM_ERR_NOMEM;
+        memcpy(bb->seg + nseg, w->tseg + s0, (s1 - s0) * sizeof *bb->seg);
+        nseg += s1 - s0;
+        bb->seg_start[k + 1] = nseg;
+        /* the tile's edges come grouped by polygon (bin_items appends them
+         * polygon by polygon) */
+        const size_t e1 = w->tedge_start[t + 1];
+        for (size_t i = w->tedge_start[t]; i < e1;)
         {
-            const size_t key = row_key(w, k, r0 + j);
-            int in = key == SIZE_MAX ? 0 : w->base[key];
-            size_t ti = key == SIZE_MAX ? 0 : w->tog_start[key];
-            const size_t te = key == SIZE_MAX ? 0 : w->tog_start[key + 1];
-            for (int32_t q = 0; q < nx; q++)
-            {
-                while (ti < te && w->tog[ti] <= c0 + q)
-                {
-                    in ^= 1;
-                    ti++;
-                }
-                const double du = sqrt(du2[j * TS1 + q]);
-                const double d = in ? -du : du;
-                if (d < v[j * TS1 + q])
-                    v[j * TS1 + q] = d;
-            }
+            const uint32_t p = w->tedge_poly[i];
+            const size_t i0 = i;
+            while (i < e1 && w->tedge_poly[i] == p)
+                i++;
+            if (!reserve(&bb->edge, &bb->cap_edge, nedge + (i - i0),
+                         sizeof *bb->edge) ||
+                !reserve(&bb->mask, &bb->cap_mask, (ngrp + 1) * TS1,
+                         sizeof *bb->mask) ||
+                !reserve(&bb->edge_start, &bb->cap_grp, ngrp + 2,
+                         sizeof *bb->edge_start))
+                return WM_ERR_NOMEM;
+            memcpy(bb->edge + nedge, w->tedge + i0,
+                   (i - i0) * sizeof *bb->edge);
+            nedge += i - i0;
+            for (int32_t j = 0; j < TS1; j++)
+                bb->mask[ngrp * TS1 + (size_t)j] = parity_row(w, p, r0 + j, c0);
+            ngrp++;
+            bb->edge_start[ngrp] = nedge;
         }
+        bb->grp_start[k + 1] = ngrp;
     }
-    f->pairs += (uint64_t)(nx * ny) * (uint64_t)((s1 - s0) + (e1 - e0));
+    b->s = w->s;
+    b->ntiles = n;
+    b->org = bb->org;
+    b->seg_start = bb->seg_start;
+    b->seg = bb->seg;
+    b->grp_start = bb->grp_start;
+    b->ngroups = ngrp;
+    b->edge_start = bb->edge_start;
+    b->edge = bb->edge;
+    b->mask = bb->mask;
+    b->val = bb->val;
+    return WM_OK;
+}
 
+/* Stores the evaluated tile k of a batch as window tile t: uniform when
+ * every sample inside the window is +band or -band, values otherwise. */
+static wm_status store_tile(work *w, size_t t, const float *val)
+{
+    wm_field *f = w->f;
+    const float band = (float)w->s->band;
+    const int32_t c0 = (int32_t)(t % (size_t)f->ntx) * WM_TILE;
+    const int32_t r0 = (int32_t)(t / (size_t)f->ntx) * WM_TILE;
+    const int32_t nx = (c0 + WM_TILE < f->w - 1 ? WM_TILE : f->w - 1 - c0) + 1;
+    const int32_t ny = (r0 + WM_TILE < f->h - 1 ? WM_TILE : f->h - 1 - r0) + 1;
     int all_land = 1, all_water = 1;
     for (int32_t j = 0; j < ny; j++)
         for (int32_t q = 0; q < nx; q++)
         {
-            const double d = v[j * TS1 + q];
-            all_land &= d >= bandl;
-            all_water &= d <= -bandl;
+            const float d = val[j * TS1 + q];
+            all_land &= d == band;
+            all_water &= d == -band;
         }
+    f->pairs += (uint64_t)(nx * ny) *
+                (uint64_t)((w->tseg_start[t + 1] - w->tseg_start[t]) +
+                           (w->tedge_start[t + 1] - w->tedge_start[t]));
     if (all_land || all_water)
     {
         f->kind[t] = (uint8_t)(all_water ? WM_TILE_WATER : WM_TILE_LAND);
@@ -582,11 +718,7 @@ static wm_status compute_tile(work *w, int32_t tx, int32_t ty, uint8_t *haspoly)
     float *out = malloc(sizeof(float) * TS1 * TS1);
     if (!out)
         return WM_ERR_NOMEM;
-    for (int32_t j = 0; j < TS1 * TS1; j++)
-    {
-        double d = v[j] < -bandl ? -bandl : v[j];
-        out[j] = (float)(d / WM_Q);
-    }
+    memcpy(out, val, sizeof(float) * TS1 * TS1);
     f->val[t] = out;
     f->kind[t] = WM_TILE_MIXED;
     f->mixed++;
@@ -594,12 +726,16 @@ static wm_status compute_tile(work *w, int32_t tx, int32_t ty, uint8_t *haspoly)
 }
 
 wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
-                           int32_t w, int32_t h, wm_field *f, const wm_ctx *ctx)
+                           int32_t w, int32_t h, const wm_field_device *dev,
+                           wm_field *f, const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
     work wk;
+    batch_buf bb;
     uint8_t *haspoly = NULL;
+    size_t *cand = NULL, ncand = 0;
     memset(&wk, 0, sizeof wk);
+    memset(&bb, 0, sizeof bb);
     memset(f, 0, sizeof *f);
     if (w < 1 || h < 1)
         return wm_fail(ctx, WM_ERR_INVALID, "empty field window");
@@ -648,18 +784,47 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
         }
     }
     haspoly = calloc(wk.npolys + 1, 1);
-    if (!haspoly || bin_items(&wk) != WM_OK || bin_polys(&wk) != WM_OK ||
-        build_crossings(&wk) != WM_OK)
+    cand = malloc(nt * sizeof *cand);
+    if (!haspoly || !cand || bin_items(&wk) != WM_OK ||
+        bin_polys(&wk) != WM_OK || build_crossings(&wk) != WM_OK)
         goto nomem;
     for (int32_t ty = 0; ty < f->nty; ty++)
         for (int32_t tx = 0; tx < f->ntx; tx++)
-            if (compute_tile(&wk, tx, ty, haspoly) != WM_OK)
+            if (!uniform_tile(&wk, tx, ty, haspoly))
+                cand[ncand++] = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+
+    /* the C path gains nothing from large batches: small ones stay in the
+     * cache */
+    const size_t batch = dev ? WM_FIELD_BATCH : 16;
+    const size_t nb = ncand < batch ? ncand : batch;
+    bb.org = malloc((2 * nb + 1) * sizeof *bb.org);
+    bb.seg_start = malloc((nb + 1) * sizeof *bb.seg_start);
+    bb.grp_start = malloc((nb + 1) * sizeof *bb.grp_start);
+    bb.val = malloc((nb * TS1 * TS1 + 1) * sizeof *bb.val);
+    if (!bb.org || !bb.seg_start || !bb.grp_start || !bb.val)
+        goto nomem;
+    for (size_t c0 = 0; c0 < ncand; c0 += batch)
+    {
+        const size_t n = ncand - c0 < batch ? ncand - c0 : batch;
+        wm_field_batch b;
+        if (build_batch(&wk, cand + c0, n, &bb, &b) != WM_OK)
+            goto nomem;
+        st = dev ? dev->eval(dev->user, &b, ctx)
+                 : wm_field_eval_c(NULL, &b, ctx);
+        if (st != WM_OK)
+            goto failed;
+        for (size_t k = 0; k < n; k++)
+            if (store_tile(&wk, cand[c0 + k], bb.val + k * TS1 * TS1) != WM_OK)
                 goto nomem;
+    }
     goto cleanup;
 nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory computing the field");
+failed:
     wm_field_free(f);
 cleanup:
+    batch_buf_free(&bb);
+    free(cand);
     free(haspoly);
     free(wk.segs);
     free(wk.polys);

@@ -43,11 +43,68 @@ extern "C"
         uint64_t pairs;   /**< sample-segment pairs evaluated (statistics) */
     } wm_field;
 
+    /** Samples per tile side. */
+#define WM_TS1 (WM_TILE + 1)
+
+    /**
+     * Tiles whose samples need evaluating, as handed to a field device.
+     *
+     * wm_field_compute decides which tiles are uniform (nothing in reach, or
+     * inside a polygon with no edge in reach) and gathers the others in
+     * batches of at most WM_FIELD_BATCH tiles. For every batch tile it lists
+     * the river segments in reach and, per lake polygon with edges in reach,
+     * those edges (a "group") with the polygon's even-odd parity at each
+     * tile sample, computed exactly on the host. A device turns that into
+     * values: val[k * WM_TS1^2 + j * WM_TS1 + i] is tile k's sample (i, j),
+     *   min( band, min_rivers |p - seg| - r, min_groups (+/-) min_edges
+     *        |p - edge| ) clamped below at -band, in pixels,
+     * the sign of a group being - where its parity bit is set. Every tile is
+     * a full WM_TS1 x WM_TS1 square even where it overhangs the window
+     * (those samples are never read).
+     */
+    typedef struct
+    {
+        const wm_scene *s;
+        size_t ntiles;
+        const int64_t *org;       /**< 2 * ntiles: lattice (X, Y) of each
+                                       tile's sample (0, 0) */
+        const size_t *seg_start;  /**< ntiles + 1 offsets into seg */
+        const uint32_t *seg;      /**< indices into s->segs */
+        const size_t *grp_start;  /**< ntiles + 1 offsets into the groups */
+        size_t ngroups;           /**< groups of all tiles */
+        const size_t *edge_start; /**< ngroups + 1 offsets into edge */
+        const uint32_t *edge;     /**< indices into s->edges */
+        const uint64_t *mask;     /**< ngroups * WM_TS1 words: bit i of word
+                                       g * WM_TS1 + j is the group polygon's
+                                       parity at tile sample (i, j) */
+        float *val;               /**< out: ntiles * WM_TS1 * WM_TS1 */
+    } wm_field_batch;
+
+/** Most tiles in one batch (bounds the batch's memory to ~4.5 MB). */
+#define WM_FIELD_BATCH 1024
+
+    /** Evaluates a batch: fills b->val. Returns WM_OK or an error status
+     *  (reported through ctx). */
+    typedef wm_status (*wm_field_eval_fn)(void *user, const wm_field_batch *b,
+                                          const wm_ctx *ctx);
+
+    /** Where field values are computed: the C path or an OpenCL device. */
+    typedef struct
+    {
+        wm_field_eval_fn eval;
+        void *user;
+    } wm_field_device;
+
+    /** The C path's evaluator (double arithmetic; `user` is unused). */
+    wm_status wm_field_eval_c(void *user, const wm_field_batch *b,
+                              const wm_ctx *ctx);
+
     /** Computes the field of a window; `f` is overwritten (free it with
-     *  wm_field_free()). w, h >= 1. */
+     *  wm_field_free()). w, h >= 1. `dev` evaluates the tiles; NULL means
+     *  the C path. */
     wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
-                               int32_t w, int32_t h, wm_field *f,
-                               const wm_ctx *ctx);
+                               int32_t w, int32_t h, const wm_field_device *dev,
+                               wm_field *f, const wm_ctx *ctx);
 
     /** Value of window sample (c, r), 0 <= c < w, 0 <= r < h. */
     float wm_field_at(const wm_field *f, int32_t c, int32_t r);

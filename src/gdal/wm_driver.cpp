@@ -375,7 +375,8 @@ CPLErr WaterMeshBand::IReadBlock(int nBlockXOff, int nBlockYOff, void *pImage)
     wm_field f;
     char *msg = nullptr;
     wm_ctx ctx = {WMKeepFirstError, &msg};
-    if (wm_field_compute(&c, gx0, gytop - hc + 1, wc, hc, &f, &ctx) != WM_OK)
+    if (wm_field_compute(&c, gx0, gytop - hc + 1, wc, hc, nullptr, &f, &ctx) !=
+        WM_OK)
     {
         CPLError(CE_Failure, CPLE_AppDefined, "WATERMESH: %s",
                  msg ? msg : "field computation failed");
