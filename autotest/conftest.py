@@ -43,6 +43,23 @@ DRIVER_NAME = 'WATERMESH'
 COLLECT_ONLY_ENV = 'WATERMESH_COLLECT_ONLY'
 
 
+def _opencl_expected():
+    """Whether this environment must offer a working OpenCL device:
+    WM_EXPECT_OPENCL=1/0 when set (CI's fallback run sets 0 together with an
+    empty OCL_ICD_VENDORS folder), else whether the plugin was built with
+    OpenCL (the driver's WATERMESH_OPENCL metadata item)."""
+    env = os.environ.get('WM_EXPECT_OPENCL')
+    if env is not None:
+        return env == '1'
+    drv = gdal.GetDriverByName(DRIVER_NAME)
+    return drv is not None and drv.GetMetadataItem('WATERMESH_OPENCL') == 'YES'
+
+
+# tests that need an OpenCL device are generated only when one is expected;
+# without one, test_opencl.py checks the fallback instead (nothing skips)
+OPENCL_EXPECTED = _opencl_expected()
+
+
 def pytest_sessionstart(session):
     if gdal.GetDriverByName(DRIVER_NAME) is not None:
         return
@@ -223,7 +240,7 @@ def read_output(path, layers=('water', 'mesh')):
 WM = types.SimpleNamespace(
     gdal=gdal, ogr=ogr, osr=osr, oracle=oracle, scenes=scenes,
     BUILD_DIR=BUILD_DIR, PLUGIN_DIR=PLUGIN_DIR, CLI_PATH=CLI_PATH, DATA_DIR=DATA_DIR,
-    DRIVER_NAME=DRIVER_NAME,
+    DRIVER_NAME=DRIVER_NAME, OPENCL_EXPECTED=OPENCL_EXPECTED,
     ErrorCapture=ErrorCapture, open=open_watermesh, open_options=open_options,
     run=run_vector, read_layer=read_layer, signature=signature,
     cli=run_cli, cli_args=cli_args, read_output=read_output,

@@ -1,16 +1,12 @@
 /* test_field.c - the signed distance field: signs, union, clamping, and
  * the invariant that a sample's value depends only on its global index. */
 #include "field.h"
+#include "field_check.h"
 #include "scene_util.h"
 #include "tap.h"
 
 #include <math.h>
 #include <string.h>
-
-static int same_bits(float a, float b)
-{
-    return memcmp(&a, &b, sizeof a) == 0;
-}
 
 int main(void)
 {
@@ -35,23 +31,13 @@ int main(void)
            "field of block column 0");
     TAP_EQ(wm_field_compute(&s, 64, 0, 65, 129, NULL, &b, NULL), WM_OK,
            "field of block column 1");
-    int diff = 0;
-    for (int r = 0; r < 129; r++)
-        diff += !same_bits(wm_field_at(&a, 64, r), wm_field_at(&b, 0, r));
+    int diff = fc_shared_column_diff(&a, &b, 64);
     TAP_EQ(diff, 0, "shared border column bit-identical in both blocks");
 
     /* an odd window: every sample equal to the block's value */
     TAP_EQ(wm_field_compute(&s, 37, 11, 53, 77, NULL, &w, NULL), WM_OK,
            "odd window");
-    diff = 0;
-    for (int r = 0; r < 77; r++)
-        for (int c = 0; c < 53; c++)
-        {
-            const int gc = 37 + c, gr = 11 + r;
-            const float ref = gc <= 64 ? wm_field_at(&a, gc, gr)
-                                       : wm_field_at(&b, gc - 64, gr);
-            diff += !same_bits(wm_field_at(&w, c, r), ref);
-        }
+    diff = fc_window_diff(&w, 37, 11, &a, &b, 64);
     TAP_EQ(diff, 0, "window samples bit-identical to block samples");
 
     TAP_OK(wm_field_at(&a, 3, 21) < -2.0f + 1e-6f || wm_field_at(&a, 3, 21) < 0,

@@ -193,6 +193,7 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     res->bx = bx;
     res->by = by;
     res->mixed_tiles = f->mixed;
+    res->samples = f->samples;
     res->pairs = f->pairs;
 
     const double t1 = wm_now();

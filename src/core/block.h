@@ -50,7 +50,7 @@ extern "C"
         uint32_t *tris;    /**< (owned) */
         double seconds[WM_STAGE_COUNT];
         size_t mixed_tiles;
-        uint64_t pairs;
+        uint64_t samples, pairs;
     } wm_block_result;
 
     /** Runs block (bx, by); `res` is overwritten (free with

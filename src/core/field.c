@@ -707,6 +707,7 @@ static wm_status store_tile(work *w, size_t t, const float *val)
             all_land &= d == band;
             all_water &= d == -band;
         }
+    f->samples += (uint64_t)(nx * ny);
     f->pairs += (uint64_t)(nx * ny) *
                 (uint64_t)((w->tseg_start[t + 1] - w->tseg_start[t]) +
                            (w->tedge_start[t + 1] - w->tedge_start[t]));

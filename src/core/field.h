@@ -40,6 +40,7 @@ extern "C"
         float **val;      /**< ntx*nty pointers, (WM_TILE+1)^2 row-major values
                                for MIXED tiles, NULL otherwise (owned) */
         size_t mixed;     /**< number of MIXED tiles */
+        uint64_t samples; /**< samples evaluated (statistics) */
         uint64_t pairs;   /**< sample-segment pairs evaluated (statistics) */
     } wm_field;
 

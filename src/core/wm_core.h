@@ -27,6 +27,8 @@ extern "C"
         WM_ERR_NOMEM,     /**< an allocation failed or a size overflowed */
         WM_ERR_INVALID,   /**< the input breaks the function's contract */
         WM_ERR_CANCELLED, /**< the progress callback asked to stop */
+        WM_ERR_DEVICE,    /**< the OpenCL device failed or is missing (the C
+                               path can take over) */
         WM_ERR_INTERNAL /**< an invariant failed: a bug, reported not hidden */
     } wm_status;
 

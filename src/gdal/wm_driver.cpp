@@ -10,6 +10,7 @@
  */
 #include "wm_private.h"
 
+#include "../cl/wm_cl.h"
 #include "../core/field.h"
 
 #include <gdal_priv.h>
@@ -375,14 +376,16 @@ CPLErr WaterMeshBand::IReadBlock(int nBlockXOff, int nBlockYOff, void *pImage)
     wm_field f;
     char *msg = nullptr;
     wm_ctx ctx = {WMKeepFirstError, &msg};
-    if (wm_field_compute(&c, gx0, gytop - hc + 1, wc, hc, nullptr, &f, &ctx) !=
-        WM_OK)
+    if (wm_field_compute(&c, gx0, gytop - hc + 1, wc, hc,
+                         WMDeviceField(ds->m_poScene->device), &f,
+                         &ctx) != WM_OK)
     {
         CPLError(CE_Failure, CPLE_AppDefined, "WATERMESH: %s",
                  msg ? msg : "field computation failed");
         CPLFree(msg);
         return CE_Failure;
     }
+    WMDeviceWarn(ds->m_poScene->device);
     const float px = static_cast<float>(ds->m_poScene->params.pixel);
     for (int row = 0; row < hc; row++)
         for (int col = 0; col < wc; col++)
@@ -534,7 +537,9 @@ static const char OPEN_OPTIONS[] =
     "  <Option name='METHOD' type='string-select' default='CONTOUR'>"
     "    <Value>CONTOUR</Value>"
     "  </Option>"
-    "  <Option name='DEVICE' type='string-select' default='AUTO'>"
+    "  <Option name='DEVICE' type='string-select' default='AUTO' "
+    "description='Where the field is computed: AUTO (an OpenCL GPU if "
+    "there is one, else the C path), CPU or OPENCL'>"
     "    <Value>AUTO</Value><Value>CPU</Value><Value>OPENCL</Value>"
     "  </Option>"
     "  <Option name='NUM_THREADS' type='string' default='ALL_CPUS' "
@@ -563,7 +568,9 @@ extern "C" void GDALRegister_WATERMESH()
     poDriver->SetMetadataItem(GDAL_DMD_CONNECTION_PREFIX, "WATERMESH:");
     poDriver->SetMetadataItem(GDAL_DMD_OPENOPTIONLIST, OPEN_OPTIONS);
     poDriver->SetMetadataItem(GDAL_DCAP_VIRTUALIO, "YES");
+    poDriver->SetMetadataItem("WATERMESH_OPENCL", wm_cl_built() ? "YES" : "NO");
     poDriver->pfnIdentify = WaterMeshDataset::Identify;
     poDriver->pfnOpen = WaterMeshDataset::Open;
+    poDriver->pfnUnloadDriver = [](GDALDriver *) { WMDeviceCleanup(); };
     GetGDALDriverManager()->RegisterDriver(poDriver);
 }

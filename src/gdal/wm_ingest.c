@@ -597,6 +597,8 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
             goto fail;
         }
     }
+    if (!WMDeviceSelect(s))
+        goto fail;
     VSIFree(b.px);
     VSIFree(b.py);
     return s;
@@ -615,6 +617,7 @@ void WMSceneFree(WMScene *s)
     if (!s)
         return;
     wm_scene_free(&s->core);
+    CPLFree(s->device);
     if (s->hSRS)
         OSRRelease(s->hSRS);
     WMParamsFree(&s->params);

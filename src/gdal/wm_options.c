@@ -125,14 +125,13 @@ static int params_parse(CSLConstList opts, WMParams *p)
         return FALSE;
     }
     const char *d = CSLFetchNameValueDef(opts, "DEVICE", "AUTO");
-    if (EQUAL(d, "OPENCL"))
-    {
-        CPLError(CE_Failure, CPLE_NotSupported,
-                 "WATERMESH: DEVICE=OPENCL: this build has no OpenCL field "
-                 "path; use DEVICE=AUTO or CPU.");
-        return FALSE;
-    }
-    if (!EQUAL(d, "AUTO") && !EQUAL(d, "CPU"))
+    if (EQUAL(d, "AUTO"))
+        p->device = WM_DEVICE_AUTO;
+    else if (EQUAL(d, "CPU"))
+        p->device = WM_DEVICE_CPU;
+    else if (EQUAL(d, "OPENCL"))
+        p->device = WM_DEVICE_OPENCL;
+    else
     {
         CPLError(CE_Failure, CPLE_IllegalArg,
                  "WATERMESH: DEVICE=%s: expected AUTO, CPU or OPENCL.", d);

@@ -20,6 +20,14 @@ CPL_C_START
 /** Every option name, in documentation order (NULL-terminated). */
 extern const char *const WM_OPTION_NAMES[];
 
+/** DEVICE: where the field is computed. */
+typedef enum
+{
+    WM_DEVICE_AUTO = 0, /* a GPU through OpenCL if there is one, else C */
+    WM_DEVICE_CPU,      /* the C path */
+    WM_DEVICE_OPENCL    /* OpenCL, an error when there is no device */
+} WMDeviceKind;
+
 /** Parsed, validated parameters. */
 typedef struct
 {
@@ -29,6 +37,7 @@ typedef struct
     double block;      /* BLOCK_SIZE, m */
     int32_t n;         /* block / pixel */
     double simplify;   /* m */
+    WMDeviceKind device;
     int num_threads;
     char *target_srs; /* or NULL */
     int have_spat;
@@ -67,7 +76,39 @@ typedef struct
     double unit; /* metres per lattice unit: pixel / WM_Q */
     OGRSpatialReferenceH hSRS;
     WMParams params;
+    struct WMDevice *device; /* where the field is computed (owned) */
 } WMScene;
+
+/** A scene's field device (wm_device.c): the C path, or OpenCL with the
+ *  state of a DEVICE=AUTO run whose device failed. */
+typedef struct WMDevice
+{
+    wm_field_device field; /* runs OpenCL on cl (user: this struct) */
+    struct wm_cl *cl;      /* NULL: the C path; else borrowed from the
+                              process-wide cache */
+    int auto_mode;         /* DEVICE=AUTO: a failing device hands over to C */
+    int failed; /* atomic: 0 ok; 1, 2 the device failed (2: fail_msg is
+                   set); 3 reported */
+    char fail_msg[512];
+    char desc[480]; /* "CPU (C path...)" or "OpenCL: <device> (<platform>)" */
+} WMDevice;
+
+/** Chooses the field device of a scene (s->device) from DEVICE and the
+ *  config options WATERMESH_OPENCL_DEVICE (a device name substring) and
+ *  WATERMESH_KERNEL_DIR (a folder with field.cl, for kernel development);
+ *  logs the choice with CPLDebug. FALSE with a CPLError when DEVICE=OPENCL
+ *  cannot be honoured (or out of memory). */
+int WMDeviceSelect(WMScene *s);
+
+/** The field device to hand to the core: NULL for the C path. */
+const wm_field_device *WMDeviceField(const WMDevice *d);
+
+/** Emits the CE_Warning of a device that failed under DEVICE=AUTO, once,
+ *  from the calling thread (the block runner calls it after each block). */
+void WMDeviceWarn(WMDevice *d);
+
+/** Releases the process-wide OpenCL devices (driver unload). */
+void WMDeviceCleanup(void);
 
 /** Reads both layers into a scene (reprojecting, quantizing, indexing).
  *  Returns NULL with a CPLError. Caller frees with WMSceneFree(). */
@@ -90,7 +131,7 @@ typedef struct
     double seconds[WM_STAGE_COUNT]; /* summed over blocks (thread time) */
     double wall;
     size_t blocks, polygons, vertices, triangles, mixed_tiles;
-    uint64_t pairs;
+    uint64_t samples, pairs;
 } WMRunStats;
 
 /** A wm_error_fn keeping the first message in *(char **)user (CPLStrdup'ed;

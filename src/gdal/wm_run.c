@@ -8,6 +8,12 @@
  * strictly in block order. So output order (and bytes) do not depend on the
  * thread count (invariant 7) and memory is bounded by the window, not by
  * the scene.
+ *
+ * With an OpenCL field device the blocks are pipelined: a feeder thread
+ * computes the fields in block order (host preparation, then the device),
+ * parking them in the same ring, while the workers run the CPU stages of
+ * the blocks whose fields are ready. So the device computes block k+1's
+ * field while the CPU extracts, simplifies and triangulates block k.
  */
 #include "wm_private.h"
 
@@ -33,6 +39,12 @@ typedef struct
     wm_block_result *slot; /* window slots */
     int *ready;            /* per slot: 0 empty, 1 ok, -1 failed */
     char **msg;            /* per slot: error text */
+    /* pipelined runs only (a feeder computes the fields) */
+    int pipelined;
+    wm_field *field; /* per slot: the block's field */
+    int *fready;     /* per slot: 0 not yet, 1 ok, -1 failed */
+    char **fmsg;     /* per slot: the field's error text */
+    double *fsec;    /* per slot: the field's time */
 } runner;
 
 void WMKeepFirstError(void *user, wm_status status, const char *msg)
@@ -43,6 +55,38 @@ void WMKeepFirstError(void *user, wm_status status, const char *msg)
         *dst = CPLStrdup(msg);
 }
 
+static void *feeder(void *arg)
+{
+    runner *r = arg;
+    pthread_mutex_lock(&r->mu);
+    for (size_t i = 0;; i++)
+    {
+        while (!r->stop && i < r->nblocks && i >= r->consumed + r->window)
+            pthread_cond_wait(&r->cv, &r->mu);
+        if (r->stop || i >= r->nblocks)
+            break;
+        pthread_mutex_unlock(&r->mu);
+
+        wm_field f;
+        char *msg = NULL;
+        wm_ctx ctx = {WMKeepFirstError, &msg};
+        const double t0 = wm_now();
+        const wm_status st =
+            wm_block_field(&r->s->core, r->blocks[2 * i], r->blocks[2 * i + 1],
+                           &r->opts, &f, &ctx);
+        const double sec = wm_now() - t0;
+        pthread_mutex_lock(&r->mu);
+        const size_t k = i % r->window;
+        r->field[k] = f;
+        r->fmsg[k] = msg;
+        r->fsec[k] = sec;
+        r->fready[k] = st == WM_OK ? 1 : -1;
+        pthread_cond_broadcast(&r->cv);
+    }
+    pthread_mutex_unlock(&r->mu);
+    return NULL;
+}
+
 static void *worker(void *arg)
 {
     runner *r = arg;
@@ -50,21 +94,41 @@ static void *worker(void *arg)
     for (;;)
     {
         while (!r->stop && r->next < r->nblocks &&
-               r->next >= r->consumed + r->window)
+               (r->next >= r->consumed + r->window ||
+                (r->pipelined && !r->fready[r->next % r->window])))
             pthread_cond_wait(&r->cv, &r->mu);
         if (r->stop || r->next >= r->nblocks)
             break;
         const size_t i = r->next++;
+        const size_t k = i % r->window;
+        wm_field f;
+        int fok = 1;
+        char *msg = NULL;
+        double fsec = 0;
+        if (r->pipelined)
+        {
+            f = r->field[k];
+            fok = r->fready[k] > 0;
+            msg = r->fmsg[k];
+            fsec = r->fsec[k];
+            r->fready[k] = 0;
+            r->fmsg[k] = NULL;
+        }
         pthread_mutex_unlock(&r->mu);
 
         wm_block_result res;
-        char *msg = NULL;
+        memset(&res, 0, sizeof res);
         wm_ctx ctx = {WMKeepFirstError, &msg};
-        const wm_status st =
-            wm_block_run(&r->s->core, r->blocks[2 * i], r->blocks[2 * i + 1],
-                         &r->opts, &res, &ctx);
+        const int64_t bx = r->blocks[2 * i], by = r->blocks[2 * i + 1];
+        wm_status st = WM_ERR_DEVICE;
+        if (!r->pipelined)
+            st = wm_block_run(&r->s->core, bx, by, &r->opts, &res, &ctx);
+        else if (fok)
+        {
+            st = wm_block_finish(&r->s->core, bx, by, &f, &r->opts, &res, &ctx);
+            res.seconds[WM_STAGE_FIELD] = fsec;
+        }
         pthread_mutex_lock(&r->mu);
-        const size_t k = i % r->window;
         r->slot[k] = res;
         r->msg[k] = msg;
         r->ready[k] = st == WM_OK ? 1 : -1;
@@ -92,17 +156,27 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     r.window = 2 * (size_t)nthreads + 1;
     r.opts.simplify = s->params.simplify / s->unit;
     r.opts.triangulate = 1;
+    r.opts.dev = WMDeviceField(s->device);
+    r.pipelined = r.opts.dev != NULL;
     r.slot = CPLCalloc(r.window, sizeof *r.slot);
+    r.field = CPLCalloc(r.window, sizeof *r.field);
+    r.fready = CPLCalloc(r.window, sizeof *r.fready);
+    r.fmsg = CPLCalloc(r.window, sizeof *r.fmsg);
+    r.fsec = CPLCalloc(r.window, sizeof *r.fsec);
     r.ready = CPLCalloc(r.window, sizeof *r.ready);
     r.msg = CPLCalloc(r.window, sizeof *r.msg);
     pthread_mutex_init(&r.mu, NULL);
     pthread_cond_init(&r.cv, NULL);
-    pthread_t *th = CPLCalloc((size_t)nthreads, sizeof *th);
-    int started = 0;
-    for (; started < nthreads; started++)
-        if (pthread_create(&th[started], NULL, worker, &r) != 0)
-            break;
-    if (started == 0)
+    pthread_t *th = CPLCalloc((size_t)nthreads + 1, sizeof *th);
+    int started = 0, workers = 0;
+    if (!r.pipelined || pthread_create(&th[started], NULL, feeder, &r) == 0)
+    {
+        started += r.pipelined;
+        for (; workers < nthreads; workers++, started++)
+            if (pthread_create(&th[started], NULL, worker, &r) != 0)
+                break;
+    }
+    if (workers == 0)
     {
         CPLError(CE_Failure, CPLE_AppDefined,
                  "WATERMESH: cannot start worker threads.");
@@ -138,6 +212,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
             break;
         }
         CPLFree(msg);
+        WMDeviceWarn(s->device);
         for (int st = 0; st < WM_STAGE_COUNT; st++)
             stats->seconds[st] += res.seconds[st];
         stats->blocks++;
@@ -145,6 +220,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
         stats->vertices += res.rings.npts;
         stats->triangles += res.poly_tri ? res.poly_tri[res.npolys] : 0;
         stats->mixed_tiles += res.mixed_tiles;
+        stats->samples += res.samples;
         stats->pairs += res.pairs;
         if (!sink(user, &res))
         {
@@ -167,8 +243,15 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     {
         if (r.ready[k] > 0)
             wm_block_result_free(&r.slot[k]);
+        if (r.fready[k] > 0)
+            wm_field_free(&r.field[k]);
         CPLFree(r.msg[k]);
+        CPLFree(r.fmsg[k]);
     }
+    CPLFree(r.field);
+    CPLFree(r.fready);
+    CPLFree(r.fmsg);
+    CPLFree(r.fsec);
     CPLFree(th);
     CPLFree(r.slot);
     CPLFree(r.ready);
@@ -254,10 +337,12 @@ void WMPrintStats(const WMScene *s, const WMRunStats *st)
     }
     printf("%-16s %12.3f\n", "total (stages)", sum);
     printf("%-16s %12.3f\n", "total (wall)", st->wall);
-    printf("threads %d, blocks %lu, mixed tiles %lu, sample-segment pairs "
-           "%llu\n",
+    printf("device %s\n", s->device->desc);
+    printf("threads %d, blocks %lu, mixed tiles %lu, samples evaluated %llu, "
+           "sample-segment pairs %llu\n",
            s->params.num_threads, (unsigned long)st->blocks,
-           (unsigned long)st->mixed_tiles, (unsigned long long)st->pairs);
+           (unsigned long)st->mixed_tiles, (unsigned long long)st->samples,
+           (unsigned long long)st->pairs);
     const double denom =
         2.0 * (double)s->core.river_vertices + (double)s->core.lake_vertices;
     printf("polygons %lu, output vertices %lu, triangles %lu\n",
