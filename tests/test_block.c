@@ -109,7 +109,7 @@ static size_t edge_vertices(const wm_block_result *r, int32_t S, int side,
 
 int main(void)
 {
-    const wm_block_opts opts[2] = {{0.0, 1}, {WM_Q, 1}};
+    const wm_block_opts opts[2] = {{0.0, 1, NULL}, {WM_Q, 1, NULL}};
     for (unsigned seed = 1; seed <= 40; seed++)
     {
         wm_scene s;
