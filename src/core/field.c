@@ -644,7 +644,8 @@ static wm_status build_batch(const work *w, const size_t *tiles, size_t n,
         bb->org[2 * k] = w->X0 + (int64_t)c0 * WM_Q;
         bb->org[2 * k + 1] = w->Y0 + (int64_t)r0 * WM_Q;
         const size_t s0 = w->tseg_start[t], s1 = w->tseg_start[t + 1];
-        if (!reserve(&bb->seg, &bb->cap_seg, nseg + (s1 - s0), sizeof *bb->seg))
+        if (!reserve(&bb->seg, &bb->cap_seg, nseg + (s1 - s0) + 1,
+                     sizeof *bb->seg))
             return WM_ERR_NOMEM;
         memcpy(bb->seg + nseg, w->tseg + s0, (s1 - s0) * sizeof *bb->seg);
         nseg += s1 - s0;
@@ -658,7 +659,7 @@ static wm_status build_batch(const work *w, const size_t *tiles, size_t n,
             const size_t i0 = i;
             while (i < e1 && w->tedge_poly[i] == p)
                 i++;
-            if (!reserve(&bb->edge, &bb->cap_edge, nedge + (i - i0),
+            if (!reserve(&bb->edge, &bb->cap_edge, nedge + (i - i0) + 1,
                          sizeof *bb->edge) ||
                 !reserve(&bb->mask, &bb->cap_mask, (ngrp + 1) * TS1,
                          sizeof *bb->mask) ||
