@@ -16,7 +16,8 @@
  *
  * Opened devices (context and built program, ~0.6 s to build cold) are kept
  * per process, keyed by the device name and kernel folder, so a second
- * scene or dataset reuses them.
+ * scene or dataset reuses them; AUTO's probe (~40 ms the first time, for
+ * loading the OpenCL implementations) is remembered likewise.
  */
 #include "wm_private.h"
 
@@ -38,6 +39,43 @@ typedef struct cached
 
 static cached *g_devices;
 static pthread_mutex_t g_mu = PTHREAD_MUTEX_INITIALIZER;
+
+/* The last probe (DEVICE=AUTO): loading the OpenCL implementations costs
+ * ~40 ms on first use (PoCL), so a process probes once per device name. */
+static struct
+{
+    char *name; /* NULL: no probe yet */
+    wm_status st;
+    char desc[256];
+    int gpu;
+    char *err;
+} g_probe;
+
+/* wm_cl_probe, remembered per process; *err (CPLStrdup'ed, caller frees)
+ * on failure. */
+static wm_status probe(const char *name, char *desc, size_t desc_size, int *gpu,
+                       char **err)
+{
+    name = name ? name : "";
+    pthread_mutex_lock(&g_mu);
+    if (!g_probe.name || strcmp(g_probe.name, name) != 0)
+    {
+        CPLFree(g_probe.name);
+        CPLFree(g_probe.err);
+        g_probe.name = CPLStrdup(name);
+        g_probe.err = NULL;
+        wm_ctx ctx = {WMKeepFirstError, &g_probe.err};
+        g_probe.st = wm_cl_probe(name, g_probe.desc, sizeof g_probe.desc,
+                                 &g_probe.gpu, &ctx);
+    }
+    const wm_status st = g_probe.st;
+    snprintf(desc, desc_size, "%s", g_probe.desc);
+    *gpu = g_probe.gpu;
+    if (st != WM_OK)
+        *err = CPLStrdup(g_probe.err ? g_probe.err : "no OpenCL device");
+    pthread_mutex_unlock(&g_mu);
+    return st;
+}
 
 /* The open device for (name, kernel_dir), opened on first use. NULL with
  * *err set (the caller frees it with CPLFree) when that failed. */
@@ -80,6 +118,9 @@ void WMDeviceCleanup(void)
         CPLFree(c->err);
         CPLFree(c);
     }
+    CPLFree(g_probe.name);
+    CPLFree(g_probe.err);
+    memset(&g_probe, 0, sizeof g_probe);
     pthread_mutex_unlock(&g_mu);
 }
 
@@ -172,10 +213,9 @@ int WMDeviceSelect(WMScene *s)
     {
         char desc[256], why[400];
         int gpu = 0;
-        wm_ctx ctx = {WMKeepFirstError, &msg};
-        if (wm_cl_probe(name, desc, sizeof desc, &gpu, &ctx) != WM_OK)
+        if (probe(name, desc, sizeof desc, &gpu, &msg) != WM_OK)
         {
-            ok = use_c(d, msg ? msg : "no OpenCL device");
+            ok = use_c(d, msg);
             goto done;
         }
         if (!gpu && !named)
