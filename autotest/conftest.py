@@ -202,7 +202,8 @@ def run_vector(options, path='WATERMESH:', spat=None, layers=('water', 'mesh'), 
 
 CLI_OPTION_NAMES = ('rivers', 'rivers_layer', 'rivers_where', 'lakes', 'lakes_layer',
                     'lakes_where', 'width', 'width_field', 'pixel_size', 'block_size',
-                    'simplify', 'method', 'device', 'num_threads', 'target_srs')
+                    'simplify', 'method', 'heuristic', 'merge_distance', 'device',
+                    'num_threads', 'target_srs')
 
 
 def cli_args(options):

@@ -111,6 +111,12 @@ def test_pixel_size_not_positive(wm, simple_options, value):
     assert_refused(wm, dict(simple_options, PIXEL_SIZE=value), all_of=['PIXEL_SIZE'])
 
 
+@pytest.mark.parametrize('option,value', [('METHOD', 'MARCHING'), ('HEURISTIC', 'RANDOM'),
+                                          ('MERGE_DISTANCE', '-1'), ('MERGE_DISTANCE', 'far')])
+def test_method_options_refused(wm, simple_options, option, value):
+    assert_refused(wm, dict(simple_options, **{option: value}), all_of=[option, value])
+
+
 def test_block_size_not_multiple_of_pixel_size(wm, simple_options):
     assert_refused(wm, dict(simple_options, PIXEL_SIZE=3, BLOCK_SIZE=1000), all_of=['BLOCK_SIZE'])
 
@@ -170,11 +176,14 @@ def _cli_case(case, tmp_dir, simple_scene):
         return ['-rivers', p, '-rivers_layer', 'rivers'], '77'
     if case == 'neither':
         return ['-width', '5'], 'LAKES'
+    if case == 'heuristic':
+        return ['-rivers', simple_scene, '-rivers_layer', 'rivers', '-method', 'PAPER',
+                '-heuristic', 'RANDOM'], 'HEURISTIC'
     raise ValueError(case)
 
 
 @pytest.mark.parametrize('case', ['missing_datasource', 'missing_layer', 'pixel_size', 'block_size',
-                                  'polygons_as_rivers', 'nan', 'neither'])
+                                  'polygons_as_rivers', 'nan', 'neither', 'heuristic'])
 def test_cli_refuses(wm, tmp_dir, simple_scene, case):
     args, token = _cli_case(case, tmp_dir, simple_scene)
     out_dir = os.path.join(tmp_dir, 'out')
@@ -212,11 +221,12 @@ def assert_valid_run(wm, options, block_size, area_rel):
     return res
 
 
+@pytest.mark.parametrize('method', ['CONTOUR', 'PAPER'])
 @pytest.mark.parametrize('kind', scenes.ODD_KINDS)
-def test_odd_input(wm, tmp_dir, kind):
+def test_odd_input(wm, tmp_dir, kind, method):
     p = scenes.make_odd_scene(os.path.join(tmp_dir, '%s.gpkg' % kind), kind)
     o = {'RIVERS': p, 'RIVERS_LAYER': 'rivers', 'LAKES': p, 'LAKES_LAYER': 'lakes',
-         'WIDTH_FIELD': 'width', 'PIXEL_SIZE': 0.5, 'BLOCK_SIZE': 256}
+         'WIDTH_FIELD': 'width', 'PIXEL_SIZE': 0.5, 'BLOCK_SIZE': 256, 'METHOD': method}
     assert_valid_run(wm, o, 256, ODD_AREA_TOL.get(kind, 0.015))
 
 

@@ -15,7 +15,8 @@ import scenes
 
 ALL_OPTIONS = ('RIVERS', 'RIVERS_LAYER', 'RIVERS_WHERE', 'LAKES', 'LAKES_LAYER',
                'LAKES_WHERE', 'WIDTH', 'WIDTH_FIELD', 'PIXEL_SIZE', 'BLOCK_SIZE',
-               'SIMPLIFY', 'METHOD', 'DEVICE', 'NUM_THREADS', 'TARGET_SRS')
+               'SIMPLIFY', 'METHOD', 'HEURISTIC', 'MERGE_DISTANCE', 'DEVICE',
+               'NUM_THREADS', 'TARGET_SRS')
 
 AREA_REL_TOL = 0.01  # driver water area vs oracle on the small hand-made scene
 
@@ -327,6 +328,50 @@ def test_method_contour(wm, simple_options):
     a = wm.run(with_(simple_options, METHOD='CONTOUR'))
     b = wm.run(simple_options)
     assert a.signature() == b.signature()
+
+
+def test_method_paper(wm, simple_options):
+    """METHOD=PAPER: other rings (vertices on samples), same water to within
+    a few percent, valid and seamless."""
+    a = wm.run(with_(simple_options, METHOD='PAPER', SIMPLIFY=0))
+    b = wm.run(with_(simple_options, SIMPLIFY=0))
+    assert a.signature() != b.signature()
+    ca, cb = oracle.total_area(a.water), oracle.total_area(b.water)
+    assert abs(ca - cb) <= 0.03 * cb, (ca, cb)
+    assert not oracle.check_water(a.water, 512)
+    assert oracle.check_seams(a.water, 512)[:2] == (0, 0)
+    # vertices on samples: PIXEL_SIZE 1, so every coordinate is an integer
+    # number of pixels from the block origin
+    for f in a.water:
+        for ring in oracle.rings_of(f.geom):
+            assert all(float(x).is_integer() and float(y).is_integer() for x, y in ring)
+
+
+def test_heuristic_changes_the_walk(wm, simple_options):
+    o = with_(simple_options, METHOD='PAPER', SIMPLIFY=0)
+    runs = {h: wm.run(with_(o, HEURISTIC=h))
+            for h in ('CLOSEST', 'DIRECTIONAL_CW', 'DIRECTIONAL_CCW', 'LEAST_ANGLE')}
+    assert len({repr(r.signature()) for r in runs.values()}) >= 2, \
+        'every HEURISTIC gave the same output'
+    # DIRECTIONAL_CW traces the region exactly, the others may cut corners
+    n = {h: oracle.vertex_count(r.water) for h, r in runs.items()}
+    assert n['DIRECTIONAL_CW'] == max(n.values()), n
+    for r in runs.values():
+        assert not oracle.check_water(r.water, 512)
+
+
+@pytest.mark.parametrize('method', ['CONTOUR', 'PAPER'])
+def test_merge_distance(wm, simple_options, method):
+    o = with_(simple_options, METHOD=method, SIMPLIFY=0)
+    a = wm.run(o)
+    b = wm.run(with_(o, MERGE_DISTANCE=2))
+    va, vb = oracle.vertex_count(a.water), oracle.vertex_count(b.water)
+    assert vb < va, (va, vb)
+    assert not oracle.check_water(b.water, 512)
+    assert oracle.check_seams(b.water, 512)[:2] == (0, 0)
+    assert oracle.check_seams(b.mesh, 512)[:2] == (0, 0)
+    problems, _ = oracle.check_mesh(b.mesh, b.water, 512)
+    assert not problems, problems[:5]
 
 
 def test_method_invalid_is_reported(wm, simple_options):

@@ -34,7 +34,7 @@ typedef struct
 static void *work(void *arg)
 {
     job *j = arg;
-    wm_block_opts opts = {0, 0, j->dev};
+    wm_block_opts opts = {.dev = j->dev};
     for (;;)
     {
         pthread_mutex_lock(&j->mu);

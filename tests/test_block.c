@@ -109,7 +109,8 @@ static size_t edge_vertices(const wm_block_result *r, int32_t S, int side,
 
 int main(void)
 {
-    const wm_block_opts opts[2] = {{0.0, 1, NULL}, {WM_Q, 1, NULL}};
+    const wm_block_opts opts[2] = {{.simplify = 0.0, .triangulate = 1},
+                                   {.simplify = WM_Q, .triangulate = 1}};
     for (unsigned seed = 1; seed <= 40; seed++)
     {
         wm_scene s;

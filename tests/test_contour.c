@@ -1,40 +1,13 @@
 /* test_contour.c - marching squares: case table, saddle rule, orientation,
  * closing along the block square, and the wm_rings invariants. */
 #include "contour.h"
+#include "field_check.h"
 #include "lattice.h"
 #include "ring_check.h"
 #include "tap.h"
 
 #include <stdlib.h>
 #include <string.h>
-
-/* A block field of n cells from a dense (n+1)^2 array, all tiles mixed. */
-static void make_field(wm_field *f, int32_t n, const float *v)
-{
-    memset(f, 0, sizeof *f);
-    f->w = f->h = n + 1;
-    f->band = 2;
-    f->ntx = f->nty = (n - 1) / WM_TILE + 1;
-    const size_t nt = (size_t)f->ntx * (size_t)f->nty;
-    f->kind = calloc(nt, 1);
-    f->val = calloc(nt, sizeof *f->val);
-    for (int32_t ty = 0; ty < f->nty; ty++)
-        for (int32_t tx = 0; tx < f->ntx; tx++)
-        {
-            const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
-            float *o = calloc((WM_TILE + 1) * (WM_TILE + 1), sizeof *o);
-            for (int32_t j = 0; j <= WM_TILE; j++)
-                for (int32_t i = 0; i <= WM_TILE; i++)
-                {
-                    int32_t c = tx * WM_TILE + i, r = ty * WM_TILE + j;
-                    if (c > n || r > n)
-                        continue;
-                    o[j * (WM_TILE + 1) + i] = v[r * (n + 1) + c];
-                }
-            f->val[t] = o;
-            f->kind[t] = WM_TILE_MIXED;
-        }
-}
 
 /* Checks the wm_rings invariants by brute force; returns the number of
  * violations. */
@@ -78,7 +51,7 @@ int main(void)
     for (int i = 0; i < (N + 1) * (N + 1); i++)
         v[i] = 1.0f;
     v[4 * (N + 1) + 4] = -1.0f;
-    make_field(&f, N, v);
+    fc_make_field(&f, N + 1, N + 1, v, 2.0f);
     TAP_EQ(wm_contour_extract(&f, &r, NULL), WM_OK, "single water sample");
     TAP_EQ(r.nrings, 1, "one ring");
     TAP_EQ(wm_rings_len(&r, 0), 4, "four crossings");
@@ -93,7 +66,7 @@ int main(void)
     for (int i = 0; i < (N + 1) * (N + 1); i++)
         v[i] = -1.0f;
     v[4 * (N + 1) + 4] = 1.0f; /* one land sample: a hole */
-    make_field(&f, N, v);
+    fc_make_field(&f, N + 1, N + 1, v, 2.0f);
     TAP_EQ(wm_contour_extract(&f, &r, NULL), WM_OK, "water block, one hole");
     TAP_EQ(r.nrings, 2, "square and hole");
     {
@@ -118,7 +91,7 @@ int main(void)
         const float wv = joined ? -3.0f : -0.5f;
         v[3 * (N + 1) + 3] = wv; /* corner 0 of cell (3,3) */
         v[4 * (N + 1) + 4] = wv; /* corner 2 */
-        make_field(&f, N, v);
+        fc_make_field(&f, N + 1, N + 1, v, 2.0f);
         TAP_EQ(wm_contour_extract(&f, &r, NULL), WM_OK, "saddle %d", joined);
         TAP_EQ(r.nrings, joined ? 1 : 2,
                joined ? "mean <= 0: water joined, one ring"
@@ -134,7 +107,7 @@ int main(void)
     for (int rr = 0; rr <= N; rr++)
         for (int c = 0; c <= N; c++)
             v[rr * (N + 1) + c] = (c < 3 && rr < 3) ? -1.0f : 1.0f;
-    make_field(&f, N, v);
+    fc_make_field(&f, N + 1, N + 1, v, 2.0f);
     TAP_EQ(wm_contour_extract(&f, &r, NULL), WM_OK, "corner water");
     TAP_EQ(r.nrings, 1, "one ring");
     TAP_EQ(sign_of_area(&r, 0), 1, "CCW");
@@ -167,7 +140,7 @@ int main(void)
             if (i % 7 == 0)
                 big[i] = 0.0f; /* exact zeros count as water */
         }
-        make_field(&f, M, big);
+        fc_make_field(&f, M + 1, M + 1, big, 2.0f);
         TAP_EQ(wm_contour_extract(&f, &r, NULL), WM_OK, "noise field");
         TAP_OK(r.nrings > 50, "noise gives many rings (%zu)", r.nrings);
         TAP_EQ(check_rings(&r, M * WM_Q), 0, "noise rings valid");

@@ -13,6 +13,8 @@
 #include "crease.h"
 #include "field.h"
 #include "holes.h"
+#include "merge.h"
+#include "paper.h"
 #include "simplify.h"
 
 #include <stdlib.h>
@@ -197,15 +199,23 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     res->pairs = f->pairs;
 
     const double t1 = wm_now();
-    st = wm_contour_extract(f, &raw, ctx);
-    if (st == WM_OK)
-        st = wm_crease_recover(s, f, bx, by, &raw, ctx);
+    if (opts->method == WM_METHOD_PAPER)
+        st =
+            wm_paper_extract(f, (wm_heuristic)opts->heuristic, &raw, NULL, ctx);
+    else
+    {
+        st = wm_contour_extract(f, &raw, ctx);
+        if (st == WM_OK)
+            st = wm_crease_recover(s, f, bx, by, &raw, ctx);
+    }
     wm_field_free(f);
     double t2 = wm_now();
     res->seconds[WM_STAGE_EXTRACT] = t2 - t1;
     if (st != WM_OK)
         goto cleanup;
     st = wm_simplify_rings(&raw, s->n * WM_Q, opts->simplify, &simp, ctx);
+    if (st == WM_OK && opts->merge > 0)
+        st = wm_merge_rings(&simp, s->n * WM_Q, opts->merge, NULL, ctx);
     double t3 = wm_now();
     res->seconds[WM_STAGE_SIMPLIFY] = t3 - t2;
     if (st != WM_OK)

@@ -24,12 +24,22 @@ extern "C"
         WM_STAGE_COUNT
     };
 
+    /** Boundary extraction. */
+    typedef enum
+    {
+        WM_METHOD_CONTOUR = 0, /**< marching squares + crease recovery */
+        WM_METHOD_PAPER        /**< the paper's classes and Border walk */
+    } wm_method;
+
     /** Options of the block pipeline. */
     typedef struct
     {
         double simplify; /**< Douglas-Peucker tolerance, lattice units; 0 off */
         int triangulate; /**< 0: polygons only */
         const wm_field_device *dev; /**< evaluates the field; NULL: C path */
+        wm_method method;
+        int heuristic; /**< a wm_heuristic (paper.h), METHOD=PAPER */
+        double merge;  /**< vertex merge distance, lattice units; 0 off */
     } wm_block_opts;
 
     /**

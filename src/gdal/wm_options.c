@@ -16,10 +16,12 @@
 #include <string.h>
 
 const char *const WM_OPTION_NAMES[] = {
-    "RIVERS",      "RIVERS_LAYER", "RIVERS_WHERE", "LAKES",
-    "LAKES_LAYER", "LAKES_WHERE",  "WIDTH",        "WIDTH_FIELD",
-    "PIXEL_SIZE",  "BLOCK_SIZE",   "SIMPLIFY",     "METHOD",
-    "DEVICE",      "NUM_THREADS",  "TARGET_SRS",   NULL};
+    "RIVERS",      "RIVERS_LAYER",   "RIVERS_WHERE",
+    "LAKES",       "LAKES_LAYER",    "LAKES_WHERE",
+    "WIDTH",       "WIDTH_FIELD",    "PIXEL_SIZE",
+    "BLOCK_SIZE",  "SIMPLIFY",       "METHOD",
+    "HEURISTIC",   "MERGE_DISTANCE", "DEVICE",
+    "NUM_THREADS", "TARGET_SRS",     NULL};
 
 /* Parses a strictly numeric option value; CPLError on failure. */
 static int number(CSLConstList opts, const char *name, double def, double *out)
@@ -116,12 +118,37 @@ static int params_parse(CSLConstList opts, WMParams *p)
         return FALSE;
     }
     const char *m = CSLFetchNameValueDef(opts, "METHOD", "CONTOUR");
-    if (!EQUAL(m, "CONTOUR"))
+    if (EQUAL(m, "CONTOUR"))
+        p->method = WM_METHOD_CONTOUR;
+    else if (EQUAL(m, "PAPER"))
+        p->method = WM_METHOD_PAPER;
+    else
     {
-        CPLError(CE_Failure, CPLE_NotSupported,
-                 "WATERMESH: METHOD=%s is not supported (CONTOUR only in "
-                 "this version).",
-                 m);
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: METHOD=%s: expected CONTOUR or PAPER.", m);
+        return FALSE;
+    }
+    static const char *const heuristics[] = {
+        "CLOSEST", "DIRECTIONAL_CW", "DIRECTIONAL_CCW", "LEAST_ANGLE", NULL};
+    const char *h = CSLFetchNameValueDef(opts, "HEURISTIC", "CLOSEST");
+    p->heuristic = -1;
+    for (int i = 0; heuristics[i]; i++)
+        if (EQUAL(h, heuristics[i]))
+            p->heuristic = i; /* the order of wm_heuristic */
+    if (p->heuristic < 0)
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: HEURISTIC=%s: expected CLOSEST, DIRECTIONAL_CW, "
+                 "DIRECTIONAL_CCW or LEAST_ANGLE.",
+                 h);
+        return FALSE;
+    }
+    if (!number(opts, "MERGE_DISTANCE", 0.0, &p->merge))
+        return FALSE;
+    if (!(p->merge >= 0))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: MERGE_DISTANCE=%g must be >= 0.", p->merge);
         return FALSE;
     }
     const char *d = CSLFetchNameValueDef(opts, "DEVICE", "AUTO");

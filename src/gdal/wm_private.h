@@ -37,6 +37,9 @@ typedef struct
     double block;      /* BLOCK_SIZE, m */
     int32_t n;         /* block / pixel */
     double simplify;   /* m */
+    wm_method method;  /* METHOD */
+    int heuristic;     /* HEURISTIC, a wm_heuristic (METHOD=PAPER) */
+    double merge;      /* MERGE_DISTANCE, m; 0: off */
     WMDeviceKind device;
     int num_threads;
     char *target_srs; /* or NULL */

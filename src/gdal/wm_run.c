@@ -156,6 +156,9 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     r.window = 2 * (size_t)nthreads + 1;
     r.opts.simplify = s->params.simplify / s->unit;
     r.opts.triangulate = 1;
+    r.opts.method = s->params.method;
+    r.opts.heuristic = s->params.heuristic;
+    r.opts.merge = s->params.merge / s->unit;
     r.opts.dev = WMDeviceField(s->device);
     r.pipelined = r.opts.dev != NULL;
     r.slot = CPLCalloc(r.window, sizeof *r.slot);
