@@ -45,7 +45,8 @@ OGRSpatialReferenceH CPL_DLL WMGetWorkingSRS(OGRLayerH hRivers,
  *                 per block), or NULL; fields block_x, block_y, triangles
  *                 are set when present
  * @param papszOptions WIDTH, WIDTH_FIELD, PIXEL_SIZE, BLOCK_SIZE, SIMPLIFY,
- *                 METHOD, DEVICE, NUM_THREADS, TARGET_SRS (see the driver
+ *                 METHOD, HEURISTIC, MERGE_DISTANCE, DEVICE,
+ *                 NUM_THREADS, TARGET_SRS (see the driver
  *                 documentation), SPAT=xmin,ymin,xmax,ymax (working CRS:
  *                 only blocks touching it), STATS=YES (print the per-stage
  *                 timing table to stdout)
