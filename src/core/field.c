@@ -453,55 +453,62 @@ static uint64_t parity_row(const work *w, size_t k, int32_t r, int32_t c0)
 #define WM_CLONES
 #endif
 
-/* d^2 from every sample of a full tile to segment [a, b] into d2[]; (X, Y)
- * is the lattice position of tile sample (0, 0). Samples beyond the window
- * are computed too (fixed trip counts vectorize) and never read. */
-WM_CLONES
-static void seg_dist2(int64_t ax, int64_t ay, int64_t bx, int64_t by, int64_t X,
-                      int64_t Y, double *d2)
+/* The tile loops below run over full tiles: samples beyond the window are
+ * computed too (fixed trip counts vectorize) and never read. (X, Y) is the
+ * lattice position of tile sample (0, 0). */
+
+/* Squared distance from p to segment [0, ab] (p relative to a); inv =
+ * 1 / |ab|^2, or 0 for a point. Inlined into each vector clone. */
+static inline double seg_d2(double px, double py, double abx, double aby,
+                            double inv)
 {
-    const double abx = (double)(bx - ax), aby = (double)(by - ay);
-    const double len2 = abx * abx + aby * aby;
-    const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
-    const double ox = (double)(X - ax), oy = (double)(Y - ay);
-    for (int32_t j = 0; j < TS1; j++)
-    {
-        const double py = oy + (double)j * WM_Q;
-        double *row = d2 + j * TS1;
-        for (int32_t i = 0; i < TS1; i++)
-        {
-            const double px = ox + (double)i * WM_Q;
-            double t = (px * abx + py * aby) * inv;
-            t = t < 0.0 ? 0.0 : t;
-            t = t > 1.0 ? 1.0 : t;
-            const double dx = px - t * abx, dy = py - t * aby;
-            row[i] = dx * dx + dy * dy;
-        }
-    }
+    double t = (px * abx + py * aby) * inv;
+    t = t < 0.0 ? 0.0 : t;
+    t = t > 1.0 ? 1.0 : t;
+    const double dx = px - t * abx, dy = py - t * aby;
+    return dx * dx + dy * dy;
 }
 
 /* v = min(v, |p - seg| - r) over a full tile. */
 WM_CLONES
-static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
-                      double *d2)
+static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v)
 {
-    seg_dist2(g->ax, g->ay, g->bx, g->by, X, Y, d2);
+    const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
+    const double len2 = abx * abx + aby * aby;
+    const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
+    const double ox = (double)(X - g->ax), oy = (double)(Y - g->ay);
     const double r = g->r;
-    for (int32_t j = 0; j < TS1 * TS1; j++)
+    for (int32_t j = 0; j < TS1; j++)
     {
-        const double d = sqrt(d2[j]) - r;
-        v[j] = d < v[j] ? d : v[j];
+        const double py = oy + (double)j * WM_Q;
+        double *row = v + j * TS1;
+        for (int32_t i = 0; i < TS1; i++)
+        {
+            const double d =
+                sqrt(seg_d2(ox + (double)i * WM_Q, py, abx, aby, inv)) - r;
+            row[i] = d < row[i] ? d : row[i];
+        }
     }
 }
 
 /* du2 = min(du2, d^2 to edge) over a full tile. */
 WM_CLONES
-static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
-                      double *d2)
+static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2)
 {
-    seg_dist2(g->ax, g->ay, g->bx, g->by, X, Y, d2);
-    for (int32_t j = 0; j < TS1 * TS1; j++)
-        du2[j] = d2[j] < du2[j] ? d2[j] : du2[j];
+    const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
+    const double len2 = abx * abx + aby * aby;
+    const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
+    const double ox = (double)(X - g->ax), oy = (double)(Y - g->ay);
+    for (int32_t j = 0; j < TS1; j++)
+    {
+        const double py = oy + (double)j * WM_Q;
+        double *row = du2 + j * TS1;
+        for (int32_t i = 0; i < TS1; i++)
+        {
+            const double d2 = seg_d2(ox + (double)i * WM_Q, py, abx, aby, inv);
+            row[i] = d2 < row[i] ? d2 : row[i];
+        }
+    }
 }
 
 /* v = min(v, +/- sqrt(du2)) over a full tile, the sign - where the
@@ -528,20 +535,20 @@ wm_status wm_field_eval_c(void *user, const wm_field_batch *b,
     (void)ctx;
     const wm_scene *s = b->s;
     const double bandl = (double)s->band * WM_Q;
-    double v[TS1 * TS1], d2[TS1 * TS1], du2[TS1 * TS1];
+    double v[TS1 * TS1], du2[TS1 * TS1];
     for (size_t k = 0; k < b->ntiles; k++)
     {
         const int64_t X = b->org[2 * k], Y = b->org[2 * k + 1];
         for (int32_t i = 0; i < TS1 * TS1; i++)
             v[i] = bandl;
         for (size_t i = b->seg_start[k]; i < b->seg_start[k + 1]; i++)
-            river_min(&s->segs[b->seg[i]], X, Y, v, d2);
+            river_min(&s->segs[b->seg[i]], X, Y, v);
         for (size_t g = b->grp_start[k]; g < b->grp_start[k + 1]; g++)
         {
             for (int32_t j = 0; j < TS1 * TS1; j++)
                 du2[j] = INFINITY;
             for (size_t i = b->edge_start[g]; i < b->edge_start[g + 1]; i++)
-                edge_min2(&s->edges[b->edge[i]], X, Y, du2, d2);
+                edge_min2(&s->edges[b->edge[i]], X, Y, du2);
             lake_min(du2, b->mask + g * TS1, v);
         }
         float *out = b->val + k * TS1 * TS1;
