@@ -486,7 +486,8 @@ static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v)
         {
             const double d =
                 sqrt(seg_d2(ox + (double)i * WM_Q, py, abx, aby, inv)) - r;
-            row[i] = d < row[i] ? d : row[i];
+            const double cur = row[i];
+            row[i] = d < cur ? d : cur;
         }
     }
 }
@@ -506,7 +507,8 @@ static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2)
         for (int32_t i = 0; i < TS1; i++)
         {
             const double d2 = seg_d2(ox + (double)i * WM_Q, py, abx, aby, inv);
-            row[i] = d2 < row[i] ? d2 : row[i];
+            const double cur = row[i];
+            row[i] = d2 < cur ? d2 : cur;
         }
     }
 }
