@@ -196,6 +196,16 @@ static size_t hash64(uint64_t k, size_t mask)
     return (size_t)k & mask;
 }
 
+/* Bit i set where the sample i of a tile row (WM_TILE + 1 values) is water
+ * (<= 0), the rule cell() applies. */
+static uint64_t water_bits(const float *row)
+{
+    uint64_t m = 0;
+    for (int32_t i = 0; i <= WM_TILE; i++)
+        m |= (uint64_t)(row[i] <= 0) << i;
+    return m;
+}
+
 wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                              const wm_ctx *ctx)
 {
@@ -219,12 +229,24 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
             const int32_t c0 = tx * WM_TILE, r0 = ty * WM_TILE;
             const int32_t c1 = c0 + WM_TILE < n ? c0 + WM_TILE : n;
             const int32_t r1 = r0 + WM_TILE < n ? r0 + WM_TILE : n;
+            /* water bits of the tile's sample rows; a cell needs work only
+             * where its four corner bits differ */
+            uint64_t below = water_bits(f->val[t]);
             for (int32_t r = r0; r < r1; r++)
             {
                 const float *row = f->val[t] + (r - r0) * (WM_TILE + 1);
-                for (int32_t c = c0; c < c1; c++)
-                    if (!cell(&s, c, r, row + (c - c0)))
+                const uint64_t above = water_bits(row + WM_TILE + 1);
+                uint64_t mixed = (below ^ (below >> 1)) |
+                                 (above ^ (above >> 1)) | (below ^ above);
+                mixed &= (UINT64_C(1) << (c1 - c0)) - 1;
+                while (mixed)
+                {
+                    const int32_t q = __builtin_ctzll(mixed);
+                    mixed &= mixed - 1;
+                    if (!cell(&s, c0 + q, r, row + q))
                         goto nomem;
+                }
+                below = above;
             }
         }
 
