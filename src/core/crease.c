@@ -528,10 +528,48 @@ static int can_insert(const inputs *in, const ringgrid *g, size_t ka, wm_pt c,
     return ck.ok && follows_boundary(in, a, c, b);
 }
 
-/* One pass: tries every candidate against the current rings and rebuilds
- * them with the accepted corners; *ninserted says how many. */
+/* Side of the cells that tell which candidates a later pass retries (64
+ * pixels, in lattice units). A candidate's outcome depends only on the
+ * rings within 32 pixels of it (its nearest edge is within 16, and that
+ * edge, after earlier insertions, at most 16 long), and an insertion
+ * changes the rings within 16 pixels of the corner: a candidate whose 3 x 3
+ * cells hold no corner inserted in the previous pass would meet the same
+ * rings as then, so it is not retried (the outcome is the same). */
+#define HOT_CELL (64 * WM_Q)
+
+static uint64_t hot_key(wm_pt p, int dx, int dy)
+{
+    return ckey(p.x / HOT_CELL + dx, p.y / HOT_CELL + dy);
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Whether a corner of `hot` (sorted cell keys) is in a cell next to p. */
+static int near_hot(const uint64_t *hot, size_t nhot, wm_pt p)
+{
+    for (int dy = -1; dy <= 1; dy++)
+        for (int dx = -1; dx <= 1; dx++)
+        {
+            const uint64_t k = hot_key(p, dx, dy);
+            if (bsearch(&k, hot, nhot, sizeof *hot, cmp_u64))
+                return 1;
+        }
+    return 0;
+}
+
+/* One pass: tries the candidates against the current rings and rebuilds
+ * them with the accepted corners; *ninserted says how many. With hot
+ * (sorted cell keys of the corners the previous pass inserted), only the
+ * candidates near those are tried; *newhot receives this pass's (caller
+ * frees). */
 static wm_status insert_pass(const inputs *in, wm_rings *rings,
-                             const wm_pt *cand, size_t ncand, size_t *ninserted)
+                             const wm_pt *cand, size_t ncand,
+                             const uint64_t *hot, size_t nhot,
+                             uint64_t **newhot, size_t *ninserted)
 {
     wm_status st = WM_OK;
     const int32_t S = in->s->n * WM_Q;
@@ -554,6 +592,8 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
         if (i > 0 && wm_pt_eq(cand[i], cand[i - 1]))
             continue;
         const wm_pt c = cand[i];
+        if (hot && !near_hot(hot, nhot, c))
+            continue;
         /* nearest edge: a small search first (most corners are already
          * within a quarter pixel), then up to WM_CREASE_REACH */
         nearest nr = {&g, c.x, c.y, INFINITY, SIZE_MAX};
@@ -593,6 +633,12 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
 
     if (nins == 0)
         goto cleanup;
+    *newhot = malloc(nins * sizeof **newhot);
+    if (!*newhot)
+        goto nomem;
+    for (size_t i = 0; i < nins; i++)
+        (*newhot)[i] = hot_key(ins[i].p, 0, 0);
+    qsort(*newhot, nins, sizeof **newhot, cmp_u64);
     /* rebuild the rings with the corners */
     qsort(ins, nins, sizeof *ins, cmp_ins);
     size_t j = 0;
@@ -768,15 +814,26 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
 
     /* 3-4. insertion passes: a corner next to one just inserted waits for
      * the next pass, which sees the new edges */
+    uint64_t *hot = NULL;
+    size_t nhot = 0;
     for (int pass = 0; pass < 4; pass++)
     {
         size_t n = 0;
-        st = insert_pass(&in, rings, cand, ncand, &n);
+        uint64_t *next = NULL;
+        st = insert_pass(&in, rings, cand, ncand, pass ? hot : NULL, nhot,
+                         &next, &n);
+        free(hot);
+        hot = next;
+        nhot = n;
         if (st != WM_OK)
+        {
+            free(hot);
             goto nomem;
+        }
         if (n == 0)
             break;
     }
+    free(hot);
     goto cleanup;
 nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory recovering corners");
