@@ -16,6 +16,9 @@
 #include <gdal.h>
 
 #include <ctype.h>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -192,6 +195,15 @@ static int write_output(const WMScene *scene, GDALDriverH drv, const char *path,
 
 int main(int argc, char **argv)
 {
+#if defined(__GLIBC__)
+    /* Each block allocates and frees tens of MB (tile values, rings,
+     * grids). By default glibc hands large blocks back to the kernel and
+     * faults fresh pages in for the next block: 10-15 % of a run on the
+     * synthetic L3 scene. Keep that memory in the process instead (the
+     * library leaves the host application's allocator alone). */
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);
+    mallopt(M_TRIM_THRESHOLD, 512 << 20);
+#endif
     for (int i = 1; i < argc; i++)
         if (EQUAL(argv[i], "--version"))
         { /* ours, before GDAL's general options answer with GDAL's */
