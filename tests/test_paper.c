@@ -180,6 +180,9 @@ static uint32_t rnd(void)
 static const char *const HNAME[4] = {"CLOSEST", "DIRECTIONAL_CW",
                                      "DIRECTIONAL_CCW", "LEAST_ANGLE"};
 
+/* Whether b follows a in a ring (defined below). */
+static int has_edge(const wm_rings *r, wm_pt a, wm_pt b);
+
 static void test_classify(void)
 {
     /* 7 x 5 field: values around the level 1/2 */
@@ -237,6 +240,30 @@ static void test_classify(void)
         wm_field_free(&f);
     }
     wm_field_free(&f);
+
+    /* a pinch next to a corner of the square (two water bodies two pixels
+     * apart): resolving it must not uncover the piece (0,0)-(1,0) of the
+     * bottom side, which the block below covers too */
+    {
+        const float L = 2.0f, A = -1.0f;
+        const float u[5 * 5] = {A, A, L, L, L,  /* r = 0 */
+                                L, L, L, L, L,  /* r = 1: (1,1) forced */
+                                A, A, A, L, L,  /* r = 2 */
+                                A, L, L, L, L,  /* r = 3 */
+                                L, L, L, L, L}; /* r = 4 */
+        wm_rings rr;
+        wm_paper_stats ps;
+        memset(&rr, 0, sizeof rr);
+        fc_make_field(&f, 5, 5, u, 2.0f);
+        TAP_EQ(wm_paper_extract(&f, WM_HEUR_CLOSEST, &rr, &ps, NULL), WM_OK,
+               "extract next to a corner pinch");
+        TAP_OK(ps.pinches > 0 &&
+                   (has_edge(&rr, (wm_pt){0, 0}, (wm_pt){WM_Q, 0}) ||
+                    has_edge(&rr, (wm_pt){WM_Q, 0}, (wm_pt){0, 0})),
+               "a pinch (%zu) keeps the side piece covered", ps.pinches);
+        wm_rings_free(&rr);
+        wm_field_free(&f);
+    }
 
     fc_make_field(&f, W, H, v, 0.5f);
     TAP_EQ(wm_paper_classify(&f, cls, NULL), WM_ERR_INVALID,

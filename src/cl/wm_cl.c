@@ -178,10 +178,8 @@ static wm_status pick(const char *name, cl_device_id *out, char *desc,
         cl_device_id dev[16];
         cl_uint nd = 0;
         err = clGetDeviceIDs(plat[p], CL_DEVICE_TYPE_ALL, 16, dev, &nd);
-        if (err == CL_DEVICE_NOT_FOUND)
+        if (err != CL_SUCCESS) /* no device, or a broken ICD: next one */
             continue;
-        if (err != CL_SUCCESS)
-            return cl_fail(ctx, "clGetDeviceIDs", err);
         for (cl_uint d = 0; d < nd && d < 16 && best < 2; d++)
         {
             char dname[128] = "";
@@ -515,7 +513,7 @@ wm_status wm_cl_eval(void *user, const wm_field_batch *b, const wm_ctx *ctx)
         {p.edge_start, (ng + 1) * sizeof *p.edge_start},
         {p.edge_xy, (ne + 1) * sizeof *p.edge_xy},
         {p.edge_len, (ne + 1) * sizeof *p.edge_len},
-        {b->mask, (ng * WM_TS1 + 1) * sizeof(cl_ulong)},
+        {b->mask, (ng ? ng * WM_TS1 : 1) * sizeof(cl_ulong)},
         {NULL, nt * WM_TS1 * WM_TS1 * sizeof(cl_float)},
     };
     /* an empty group list still needs a valid buffer */

@@ -31,7 +31,7 @@ extern "C"
      *
      * @param desc    receives "device name (platform name)"
      * @param is_gpu  receives 1 for a GPU or accelerator, 0 for a CPU device
-     * @return WM_OK, or WM_ERR_INVALID with a message naming the OpenCL call
+     * @return WM_OK, or WM_ERR_DEVICE with a message naming the OpenCL call
      *         and its error (no platform: CL_PLATFORM_NOT_FOUND_KHR, -1001;
      *         no device: CL_DEVICE_NOT_FOUND, -1; no device matching name)
      */

@@ -44,6 +44,7 @@ typedef struct
     uint8_t *alive;
     size_t *len;    /* per ring: vertices left */
     wm_i128 *area2; /* per ring: twice the signed area */
+    int32_t size;   /* the block square's side */
     int shift;      /* cell side 2^shift lattice units */
     int32_t nc;     /* cells per side */
     cell *cells;
@@ -100,6 +101,11 @@ static int removable(const state *s, size_t v)
     if (s->len[r] <= 3)
         return 0;
     const wm_pt pa = s->p[a], pv = s->p[v], pb = s->p[b];
+    /* never a new edge along a side of the block square: it would change
+     * which piece of the side this block covers, not the neighbour */
+    if ((pa.x == pb.x && (pa.x == 0 || pa.x == s->size)) ||
+        (pa.y == pb.y && (pa.y == 0 || pa.y == s->size)))
+        return 0;
     const wm_i128 area2 = s->area2[r] - (wm_i128)wm_orient_det(pa, pv, pb);
     if (area2 == 0 || (area2 > 0) != (s->area2[r] > 0))
         return 0;
@@ -160,6 +166,7 @@ wm_status wm_merge_rings(wm_rings *r, int32_t size, double dist, size_t *merged,
         return WM_OK;
     const size_t n = r->npts;
     s.p = r->pts;
+    s.size = size;
     s.nxt = malloc(n * sizeof *s.nxt);
     s.prv = malloc(n * sizeof *s.prv);
     s.ring = malloc(n * sizeof *s.ring);

@@ -18,7 +18,8 @@ extern "C"
      * one of its ring neighbours into that neighbour (the vertex is
      * removed), unless
      *   - it lies on the block square (x or y is 0 or `size`): neighbouring
-     *     blocks keep the same border vertices;
+     *     blocks keep the same border vertices; nor when its neighbours lie
+     *     on one side of the square (the new edge would run along it);
      *   - its ring would drop below 3 vertices or to zero area;
      *   - the edge joining its two neighbours would meet another edge, or
      *     the triangle it cuts off would contain another vertex (exact

@@ -73,7 +73,9 @@
  * (two blobs meeting diagonally, a hole touching the shore) and its
  * boundary would pass the sample twice: rings touching. Following the
  * paper's rule that a pixel belongs to one polygon, the run with the most
- * sectors keeps the sample (ties: the first counter-clockwise from E) and
+ * sectors keeps the sample (ties: the first counter-clockwise from E; but a
+ * run holding a cell with a water piece of a block square side comes
+ * first, so no cut uncovers a piece of a side: section 1b) and
  * the sample is cut out of the cells of the other runs: there it counts as
  * land, which removes exactly one half-pixel triangle per cell (a water
  * cell keeps the triangle of its other three corners, a triangle
@@ -83,11 +85,10 @@
  * this ends after at most 4 cuts per cell. Then every boundary sample has
  * one run: one incoming and one outgoing boundary edge. Cuts only remove
  * water and never change whether a sample is water, so both blocks still
- * classify a shared column alike; a block-square sample that is a pinch
- * keeps a run, hence stays a vertex. (A cut next to it can take a
- * block-square sample's only triangle; it then bounds no water in this
- * block. Ring edges join 8-neighbours, so no vertex of one block can lie
- * inside an edge of the other: no T-junction either way.)
+ * classify a shared column alike. The cells of one sample holding a water
+ * piece of a side always lie in one run (the side sample between them is
+ * water), so that run can be kept. (Ring edges join 8-neighbours, so no
+ * vertex of one block can lie inside an edge of the other.)
  *
  * 5. The walk. Start at the first unvisited Border pixel in row-major order
  * (bottom row first) with a virtual last segment heading E. Each node of
@@ -287,6 +288,19 @@ static int stack_push(stack *s, size_t v)
     return 1;
 }
 
+/* Whether quadrant q of sample (c, r) is a cell with a side on the block
+ * square whose two corners are water: the cell's triangle covers that piece
+ * of the side, which the neighbouring block covers too. */
+static int seam_cell(const grid *G, int32_t c, int32_t r, unsigned q)
+{
+    const int32_t i = c + QX[q], j = r + QY[q];
+    if (i < 0 || j < 0 || i >= G->w - 1 || j >= G->h - 1)
+        return 0;
+    const unsigned e = cell_water(G, i, j);
+    return (j == 0 && (e & 3u) == 3u) || (j == G->h - 2 && (e & 12u) == 12u) ||
+           (i == 0 && (e & 9u) == 9u) || (i == G->w - 2 && (e & 6u) == 6u);
+}
+
 /* Examines sample u: promotes it to Border when it is a boundary vertex,
  * and resolves it when it is a pinch (section 4 of the header), pushing the
  * corners of the cells cut. Returns 0 when out of memory. */
@@ -306,10 +320,23 @@ static int settle(grid *G, size_t u, stack *todo, wm_paper_stats *st)
     const unsigned n = runs(m, first, len);
     if (n < 2)
         return 1;
+    /* the run to keep: one holding a cell whose side on the block square is
+     * water at both ends (cutting it would uncover that piece of the side
+     * in this block only, section 1b); else the longest */
     unsigned keep = 0;
-    for (unsigned k = 1; k < n; k++)
-        if (len[k] > len[keep])
+    int keep_seam = 0;
+    for (unsigned k = 0; k < n; k++)
+    {
+        int seam = 0;
+        for (unsigned l = 0; l < len[k]; l++)
+            seam |= seam_cell(G, c, r, ((first[k] + l) & 7u) >> 1);
+        if (k == 0 || (seam && !keep_seam) ||
+            (seam == keep_seam && len[k] > len[keep]))
+        {
             keep = k;
+            keep_seam = seam;
+        }
+    }
     st->pinches++;
     for (unsigned k = 0; k < n; k++)
     {

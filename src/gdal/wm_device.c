@@ -161,7 +161,11 @@ static wm_status eval_device(void *user, const wm_field_batch *b,
 
 const wm_field_device *WMDeviceField(const WMDevice *d)
 {
-    return d && d->cl ? &d->field : NULL;
+    /* after a failure (AUTO) the C path computes everything: later runs
+     * are not pipelined through the device wrapper */
+    return d && d->cl && !__atomic_load_n(&d->failed, __ATOMIC_ACQUIRE)
+               ? &d->field
+               : NULL;
 }
 
 void WMDeviceWarn(WMDevice *d)
@@ -171,7 +175,9 @@ void WMDeviceWarn(WMDevice *d)
                                          __ATOMIC_ACQ_REL, __ATOMIC_ACQUIRE))
         CPLError(CE_Warning, CPLE_AppDefined,
                  "WATERMESH: DEVICE=AUTO: the OpenCL device failed (%s); the "
-                 "C path computes the rest of this run.",
+                 "C path computes the rest of this run (the shared borders "
+                 "of blocks computed on different paths may differ by "
+                 "about 1e-6 pixel).",
                  d->fail_msg);
 }
 
@@ -227,6 +233,13 @@ int WMDeviceSelect(WMScene *s)
             ok = use_c(d, why);
             goto done;
         }
+    }
+    if (!wm_cl_built())
+    {
+        ok = use_c(d, "this build has no OpenCL (configured with "
+                      "--disable-opencl or without OpenCL headers and "
+                      "library)");
+        goto done;
     }
     if (!wm_cl_fits(&s->core))
     {
