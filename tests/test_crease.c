@@ -87,6 +87,36 @@ int main(void)
         wm_rings_free(&r);
         wm_scene_free(&s);
     }
+    /* the same wedge against the bank of a river 1200 px wide (its reach
+     * box spans thousands of index cells: crease.c keeps it in the list of
+     * wide segments checked everywhere) */
+    {
+        const double th = 20 * 3.14159265358979323846 / 180.0;
+        wm_scene s;
+        su_init(&s, 1024);
+        const double r1[] = {-500, 700, 1500, 700};
+        const double r2[] = {60, 100, 60 + 190 * cos(th), 100 - 190 * sin(th)};
+        su_river(&s, r1, 2, 600.0);
+        su_river(&s, r2, 2, 5.0);
+        su_finish(&s);
+        /* the tip: river 1's lower bank (y = 100) meets river 2's upper */
+        const double cx = (60 + 5.0 / sin(th)) * WM_Q, cy = 100.0 * WM_Q;
+        wm_field f;
+        wm_rings r = {0};
+        wm_field_compute(&s, 0, 0, 1025, 1025, NULL, &f, NULL);
+        wm_contour_extract(&f, &r, NULL);
+        const double before = nearest_edge(&r, cx, cy) / WM_Q;
+        TAP_EQ(wm_crease_recover(&s, &f, 0, 0, &r, NULL), WM_OK,
+               "recover next to a wide river");
+        const double after = nearest_vertex(&r, cx, cy) / WM_Q;
+        TAP_OK(after < 0.01 && before > 1,
+               "wedge at a 1200 px river: tip %.3f px away, %.4f px after",
+               before, after);
+        TAP_OK(ring_meetings(&r) == 0, "rings still simple and disjoint");
+        wm_field_free(&f);
+        wm_rings_free(&r);
+        wm_scene_free(&s);
+    }
     /* a corner next to the block square is left alone: seams stay exact */
     {
         wm_scene s;

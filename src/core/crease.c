@@ -212,7 +212,91 @@ typedef struct
     size_t nsegs;
     const uint32_t *polys;
     size_t npolys;
+    /* river segments by cell of the block (side DCELL), each registered in
+     * the cells its box grown by radius + DREACH touches; segments touching
+     * more than WIDE cells are in `wide` instead (CSR, owned) */
+    int32_t side;
+    size_t *cstart;
+    uint32_t *cseg;
+    uint32_t *wide;
+    size_t nwide;
 } inputs;
+
+/* Cells of the river index, and the reach it serves (union_distance is
+ * always asked for at most DREACH). */
+#define DCELL (16 * WM_Q)
+#define DREACH (4.0 * WM_Q)
+#define WIDE 1024
+
+/* Cell range [lo, hi] (clamped) of the local interval [a, b]. */
+static void dcell_range(const inputs *in, double a, double b, int32_t *lo,
+                        int32_t *hi)
+{
+    const double l = floor(a / DCELL), h = floor(b / DCELL);
+    *lo = l < 0 ? 0 : (l > in->side - 1 ? in->side - 1 : (int32_t)l);
+    *hi = h < 0 ? 0 : (h > in->side - 1 ? in->side - 1 : (int32_t)h);
+}
+
+/* Local box of river segment g grown by its radius + DREACH. */
+static void seg_reach_box(const inputs *in, const wm_river_seg *g, double *b)
+{
+    const double m = g->r + DREACH;
+    b[0] = (double)((g->ax < g->bx ? g->ax : g->bx) - in->X0) - m;
+    b[1] = (double)((g->ay < g->by ? g->ay : g->by) - in->Y0) - m;
+    b[2] = (double)((g->ax > g->bx ? g->ax : g->bx) - in->X0) + m;
+    b[3] = (double)((g->ay > g->by ? g->ay : g->by) - in->Y0) + m;
+}
+
+static wm_status build_river_index(inputs *in, int32_t S)
+{
+    in->side = S / DCELL + 1;
+    const size_t ncell = (size_t)in->side * (size_t)in->side;
+    in->cstart = calloc(ncell + 1, sizeof *in->cstart);
+    in->wide = malloc((in->nsegs + 1) * sizeof *in->wide);
+    if (!in->cstart || !in->wide)
+        return WM_ERR_NOMEM;
+    size_t *cur = NULL;
+    for (int pass = 0; pass < 2; pass++)
+    {
+        in->nwide = 0;
+        for (size_t i = 0; i < in->nsegs; i++)
+        {
+            double b[4];
+            int32_t x0, x1, y0, y1;
+            seg_reach_box(in, &in->s->segs[in->segs[i]], b);
+            if (b[2] < 0 || b[3] < 0 || b[0] > S || b[1] > S)
+                continue; /* never within reach of the block */
+            dcell_range(in, b[0], b[2], &x0, &x1);
+            dcell_range(in, b[1], b[3], &y0, &y1);
+            if ((int64_t)(x1 - x0 + 1) * (y1 - y0 + 1) > WIDE)
+            {
+                in->wide[in->nwide++] = in->segs[i];
+                continue;
+            }
+            for (int32_t cy = y0; cy <= y1; cy++)
+                for (int32_t cx = x0; cx <= x1; cx++)
+                {
+                    const size_t c = (size_t)cy * (size_t)in->side + (size_t)cx;
+                    if (pass == 0)
+                        in->cstart[c + 1]++;
+                    else
+                        in->cseg[cur[c]++] = in->segs[i];
+                }
+        }
+        if (pass == 0)
+        {
+            cur = wm_csr_begin(in->cstart, ncell);
+            in->cseg = malloc((in->cstart[ncell] + 1) * sizeof *in->cseg);
+            if (!cur || !in->cseg)
+            {
+                free(cur);
+                return WM_ERR_NOMEM;
+            }
+        }
+    }
+    free(cur);
+    return WM_OK;
+}
 
 /* Distance from (x, y) (block-local, double) to segment (global ends). */
 static double seg_dist(const inputs *in, int64_t ax, int64_t ay, int64_t bx,
@@ -229,15 +313,23 @@ static double seg_dist(const inputs *in, int64_t ax, int64_t ay, int64_t bx,
 
 /* Signed distance (lattice units, negative in water) from (x, y) to the
  * union of the block's inputs, in double precision; inputs farther than
- * `reach` are ignored (the result is then +reach or more). */
+ * `reach` (<= DREACH) are ignored (the result is then +reach or more).
+ * (x, y) lies in the block square. */
 static double union_distance(const inputs *in, double x, double y, double reach)
 {
     const wm_scene *s = in->s;
     double d = reach;
     const double gx = x + (double)in->X0, gy = y + (double)in->Y0;
-    for (size_t i = 0; i < in->nsegs; i++)
+    /* the segments within reach are in the point's cell, or wide */
+    int32_t cx, cy, unused;
+    dcell_range(in, x, x, &cx, &unused);
+    dcell_range(in, y, y, &cy, &unused);
+    const size_t c = (size_t)cy * (size_t)in->side + (size_t)cx;
+    const size_t n0 = in->cstart[c + 1] - in->cstart[c];
+    for (size_t i = 0; i < n0 + in->nwide; i++)
     {
-        const wm_river_seg *g = &s->segs[in->segs[i]];
+        const wm_river_seg *g =
+            &s->segs[i < n0 ? in->cseg[in->cstart[c] + i] : in->wide[i - n0]];
         const double m = g->r + reach;
         if (gx < (double)(g->ax < g->bx ? g->ax : g->bx) - m ||
             gx > (double)(g->ax > g->bx ? g->ax : g->bx) + m ||
@@ -693,15 +785,17 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
         return WM_OK;
     const int32_t S = s->n * WM_Q;
     const size_t blk = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
-    inputs in = {s,
-                 bx * (int64_t)S,
-                 by * (int64_t)S,
-                 s->blk_seg + s->blk_seg_start[blk],
-                 s->blk_seg_start[blk + 1] - s->blk_seg_start[blk],
-                 s->blk_poly + s->blk_poly_start[blk],
-                 s->blk_poly_start[blk + 1] - s->blk_poly_start[blk]};
+    inputs in = {.s = s,
+                 .X0 = bx * (int64_t)S,
+                 .Y0 = by * (int64_t)S,
+                 .segs = s->blk_seg + s->blk_seg_start[blk],
+                 .nsegs = s->blk_seg_start[blk + 1] - s->blk_seg_start[blk],
+                 .polys = s->blk_poly + s->blk_poly_start[blk],
+                 .npolys = s->blk_poly_start[blk + 1] - s->blk_poly_start[blk]};
     if (in.nsegs + in.npolys < 1)
         return WM_OK;
+    if (build_river_index(&in, S) != WM_OK)
+        goto nomem;
 
     /* 1. primitives, local doubles */
     const double lo = -4.0 * WM_Q, hi = (double)S + 4.0 * WM_Q;
@@ -843,6 +937,9 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
 nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory recovering corners");
 cleanup:
+    free(in.cstart);
+    free(in.cseg);
+    free(in.wide);
     free(pr);
     free(pc);
     free(cand);
