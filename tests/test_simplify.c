@@ -486,6 +486,27 @@ int main(void)
             TAP_EQ(wm_rings_len(&out, 0), 11,
                    "block square: all 11 border vertices kept");
         }
+        /* a dry notch shallower than the tolerance between two vertices of
+         * the side y == 0: straightened, it would lay an edge along the
+         * side (water there in this block only) */
+        {
+            wm_rings_clear(&in);
+            const int notch[][2] = {{10000, 0},  {12000, 0},    {12500, 50},
+                                    {13000, 80}, {13500, 50},   {14000, 0},
+                                    {20000, 0},  {20000, 5000}, {10000, 5000}};
+            for (size_t i = 0; i < sizeof notch / sizeof notch[0]; i++)
+                push(&in, notch[i][0], notch[i][1]);
+            close_ring(&in);
+            wm_rings_clear(&out);
+            wm_simplify_rings(&in, S, 256, &out, NULL);
+            int kept = 0;
+            for (size_t k = 0; k < out.npts; k++)
+                kept |= out.pts[k].x == 13000 && out.pts[k].y == 80;
+            TAP_OK(kept && wm_rings_len(&out, 0) < 9,
+                   "a notch between two vertices of one side keeps its tip "
+                   "(%zu vertices)",
+                   wm_rings_len(&out, 0));
+        }
         wm_rings_clear(&in);
         /* another block: a lake whose bottom lies on y == 0 (several
          * crossing points), a noisy arc above */

@@ -15,7 +15,10 @@
  *     the rounding only keeps a few more vertices, never fewer, and every
  *     dropped input vertex stays within tol of the output segment spanning
  *     it (also after the repairs below, which re-run DP on the two halves
- *     of every refined span).
+ *     of every refined span). A chain whose two fixed ends lie on one side
+ *     of the square keeps its farthest vertex whatever the tolerance:
+ *     straightened, it would run along the side and cover there, in this
+ *     block only, a piece the neighbouring block leaves dry.
  *  2. Repairs, in the spirit of Saalfeld (1999). The output must have no
  *     two segments that cross or touch (consecutive segments of one ring
  *     share their vertex but may not fold back onto each other), every
@@ -133,6 +136,13 @@ static uint32_t s_nxt(const simp *sp, uint32_t i)
 static int s_border(wm_pt p, int32_t size)
 {
     return p.x == 0 || p.y == 0 || p.x == size || p.y == size;
+}
+
+/* Whether a and b lie on one side of the block square. */
+static int s_same_side(wm_pt a, wm_pt b, int32_t size)
+{
+    return (a.x == b.x && (a.x == 0 || a.x == size)) ||
+           (a.y == b.y && (a.y == 0 || a.y == size));
 }
 
 static wm_status s_push_work(simp *sp, uint32_t u, uint32_t v)
@@ -908,7 +918,20 @@ wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
                 uint32_t j = s_nxt(&sp, cur);
                 while (!s_border(P[j], size))
                     j = s_nxt(&sp, j);
-                s_dp(&sp, cur, j);
+                if (s_nxt(&sp, cur) != j && s_same_side(P[cur], P[j], size))
+                {
+                    /* the chain leaves the side between two of its
+                     * vertices: straightening it would lay an edge along
+                     * the side, covering in this block a piece of it that
+                     * the neighbouring block does not; keep its farthest
+                     * vertex whatever the tolerance */
+                    const uint32_t m = s_far(&sp, cur, j);
+                    sp.kept[m] = 1;
+                    s_dp(&sp, cur, m);
+                    s_dp(&sp, m, j);
+                }
+                else
+                    s_dp(&sp, cur, j);
                 cur = j;
             } while (cur != f0);
             sp.rep[r] = f0;
