@@ -106,13 +106,12 @@ static int push_seg(state *s, uint64_t ie, uint64_t oe, wm_pt ip, wm_pt op)
 }
 
 /* Cell (c, r) whose lower-left sample is at p in its tile's value array
- * (row stride WM_TILE + 1). */
+ * (row stride WM_TILE + 1); its corners are not all on one side (the caller
+ * visits only those). */
 static int cell(state *s, int32_t c, int32_t r, const float *p)
 {
     const float v[4] = {p[0], p[1], p[WM_TILE + 2], p[WM_TILE + 1]};
     const int w[4] = {v[0] <= 0, v[1] <= 0, v[2] <= 0, v[3] <= 0};
-    if (w[0] == w[1] && w[1] == w[2] && w[2] == w[3])
-        return 1;
     const int32_t n = s->n;
     /* per edge, CCW from corner k to k+1: id, crossing, out/in */
     uint64_t id[4];

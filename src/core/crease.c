@@ -228,13 +228,11 @@ typedef struct
 #define DREACH (4.0 * WM_Q)
 #define WIDE 1024
 
-/* Cell range [lo, hi] (clamped) of the local interval [a, b]. */
-static void dcell_range(const inputs *in, double a, double b, int32_t *lo,
-                        int32_t *hi)
+/* Index cell (clamped to the block) of the local coordinate v. */
+static int32_t dcell(const inputs *in, double v)
 {
-    const double l = floor(a / DCELL), h = floor(b / DCELL);
-    *lo = l < 0 ? 0 : (l > in->side - 1 ? in->side - 1 : (int32_t)l);
-    *hi = h < 0 ? 0 : (h > in->side - 1 ? in->side - 1 : (int32_t)h);
+    const double c = floor(v / DCELL);
+    return c < 0 ? 0 : (c > in->side - 1 ? in->side - 1 : (int32_t)c);
 }
 
 /* Local box of river segment g grown by its radius + DREACH. */
@@ -266,8 +264,10 @@ static wm_status build_river_index(inputs *in, int32_t S)
             seg_reach_box(in, &in->s->segs[in->segs[i]], b);
             if (b[2] < 0 || b[3] < 0 || b[0] > S || b[1] > S)
                 continue; /* never within reach of the block */
-            dcell_range(in, b[0], b[2], &x0, &x1);
-            dcell_range(in, b[1], b[3], &y0, &y1);
+            x0 = dcell(in, b[0]);
+            x1 = dcell(in, b[2]);
+            y0 = dcell(in, b[1]);
+            y1 = dcell(in, b[3]);
             if ((int64_t)(x1 - x0 + 1) * (y1 - y0 + 1) > WIDE)
             {
                 in->wide[in->nwide++] = in->segs[i];
@@ -321,10 +321,8 @@ static double union_distance(const inputs *in, double x, double y, double reach)
     double d = reach;
     const double gx = x + (double)in->X0, gy = y + (double)in->Y0;
     /* the segments within reach are in the point's cell, or wide */
-    int32_t cx, cy, unused;
-    dcell_range(in, x, x, &cx, &unused);
-    dcell_range(in, y, y, &cy, &unused);
-    const size_t c = (size_t)cy * (size_t)in->side + (size_t)cx;
+    const size_t c =
+        (size_t)dcell(in, y) * (size_t)in->side + (size_t)dcell(in, x);
     const size_t n0 = in->cstart[c + 1] - in->cstart[c];
     for (size_t i = 0; i < n0 + in->nwide; i++)
     {
