@@ -394,6 +394,42 @@ def test_device_invalid_is_reported(wm, simple_options):
         'an invalid DEVICE gave no message (ds=%s)' % ds
 
 
+def _read_with_fids(wm, options, cache_mb):
+    """(FID, WKB) of both layers, the feature counts, read with
+    WATERMESH_CACHE_MAX=cache_mb; the water layer is read twice."""
+    gdal.SetConfigOption('WATERMESH_CACHE_MAX', str(cache_mb))
+    try:
+        ds, cap = wm.open(options)
+        assert ds is not None, cap.text
+        out = {}
+        for name in ('water', 'mesh', 'water'):
+            lyr = ds.GetLayerByName(name)
+            lyr.ResetReading()
+            got = [(f.GetFID(), bytes(f.GetGeometryRef().ExportToIsoWkb())) for f in lyr]
+            if name in out:
+                assert got == out[name], 'a second read of %s differs' % name
+            out[name] = got
+        counts = {name: ds.GetLayerByName(name).GetFeatureCount() for name in ('water', 'mesh')}
+        ds = None
+        return out, counts
+    finally:
+        gdal.SetConfigOption('WATERMESH_CACHE_MAX', None)
+
+
+def test_block_cache_bounded(wm, random_scene):
+    """WATERMESH_CACHE_MAX=0 keeps no block beyond the chunk a read holds:
+    blocks are recomputed, and every feature, FID and count is the same as
+    with the default cache (many blocks: several chunks per read)."""
+    path = random_scene(1, extent=1500.0, n_tributaries=5, n_lakes=3)
+    o = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'LAKES': path, 'LAKES_LAYER': 'lakes',
+         'WIDTH_FIELD': 'width', 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 64, 'NUM_THREADS': 1}
+    big, nbig = _read_with_fids(wm, o, 512)
+    small, nsmall = _read_with_fids(wm, o, 0)
+    assert len({fid >> 24 for fid, _ in big['water']}) > 2 * 32, 'too few blocks to need chunks'
+    assert small == big
+    assert nsmall == nbig == {k: len(v) for k, v in big.items()}
+
+
 def test_num_threads_identical(wm, simple_options):
     ref = wm.run(with_(simple_options, NUM_THREADS=1)).signature()
     for n in (2, 4, 'ALL_CPUS'):

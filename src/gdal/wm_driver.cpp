@@ -50,7 +50,26 @@ class WaterMeshDataset final : public GDALDataset
     friend class WaterMeshBand;
     WMScene *m_poScene = nullptr;
     std::vector<std::unique_ptr<WaterMeshLayer>> m_apoLayers;
-    std::map<std::pair<int64_t, int64_t>, ResultPtr> m_oCache;
+
+    /* Computed blocks, least recently used first out once their size
+     * passes m_nCacheMax (WATERMESH_CACHE_MAX, MB): memory is bounded by
+     * that plus the blocks a reader holds, not by the scene. Polygon counts
+     * of every computed block stay (a few bytes each). */
+    using BlockKey = std::pair<int64_t, int64_t>;
+    struct CacheEntry
+    {
+        ResultPtr r;
+        uint64_t tick;
+        size_t bytes;
+    };
+    std::map<BlockKey, CacheEntry> m_oCache;
+    std::map<uint64_t, BlockKey> m_oByAge;
+    std::map<BlockKey, size_t> m_oCounts;
+    size_t m_nCacheBytes = 0, m_nCacheMax = 0;
+    uint64_t m_nTick = 0;
+
+    void Remember(const ResultPtr &r);
+    void Evict();
 
   public:
     WaterMeshDataset() = default;
@@ -75,8 +94,15 @@ class WaterMeshDataset final : public GDALDataset
                       : nullptr;
     }
 
-    /** Results of the blocks touching env (all if null), in block order. */
-    bool GetBlocks(const OGREnvelope *env, std::vector<ResultPtr> &out);
+    /** Results of blocks[0 .. 2n-1] (bx, by pairs), computing the missing
+     *  ones; out may be null (then only the cache and counts fill). */
+    bool Fetch(const int64_t *blocks, size_t n, std::vector<ResultPtr> *out);
+    /** Blocks per Fetch of a streaming read. */
+    size_t ChunkBlocks() const
+    {
+        return static_cast<size_t>(
+            std::max(32, 8 * m_poScene->params.num_threads));
+    }
 };
 
 class WaterMeshLayer final : public OGRLayer,
@@ -85,9 +111,12 @@ class WaterMeshLayer final : public OGRLayer,
     WaterMeshDataset *m_poDS;
     bool m_bMesh;
     OGRFeatureDefn *m_poDefn;
-    std::vector<ResultPtr> m_aoBlocks;
+    /* the blocks of a read (bx, by pairs, for the filter's envelope), and
+     * the results of those from m_iChunk0 on that the read holds */
+    std::vector<int64_t> m_anBlocks;
+    std::vector<ResultPtr> m_aoChunk;
     bool m_bComputed = false;
-    size_t m_iBlock = 0, m_iPoly = 0;
+    size_t m_iChunk0 = 0, m_iBlock = 0, m_iPoly = 0;
 
   public:
     WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh);
@@ -100,8 +129,9 @@ class WaterMeshLayer final : public OGRLayer,
     void ResetReading() override
     {
         m_bComputed = false;
-        m_aoBlocks.clear();
-        m_iBlock = m_iPoly = 0;
+        m_anBlocks.clear();
+        m_aoChunk.clear();
+        m_iChunk0 = m_iBlock = m_iPoly = 0;
     }
     OGRFeature *GetNextRawFeature();
     DEFINE_GET_NEXT_FEATURE_THROUGH_RAW(WaterMeshLayer)
@@ -168,15 +198,52 @@ CPLErr WaterMeshDataset::GetGeoTransform(double *gt)
     return CE_None;
 }
 
-struct CacheSink
+/* Bytes a block result holds. */
+static size_t result_bytes(const wm_block_result *r)
 {
-    WaterMeshDataset *ds;
-    std::map<std::pair<int64_t, int64_t>, ResultPtr> *cache;
+    return sizeof *r + r->rings.pts_cap * sizeof(wm_pt) +
+           r->rings.start_cap * sizeof(size_t) +
+           2 * (r->npolys + 1) * sizeof(size_t) +
+           (r->poly_tri ? r->poly_tri[r->npolys] : 0) * 3 * sizeof(uint32_t);
+}
+
+void WaterMeshDataset::Remember(const ResultPtr &r)
+{
+    const BlockKey key{r->bx, r->by};
+    m_oCounts[key] = r->npolys;
+    auto it = m_oCache.find(key);
+    if (it != m_oCache.end())
+    {
+        m_oByAge.erase(it->second.tick);
+        m_nCacheBytes -= it->second.bytes;
+        m_oCache.erase(it);
+    }
+    const size_t bytes = result_bytes(r.get());
+    m_oCache[key] = CacheEntry{r, ++m_nTick, bytes};
+    m_oByAge[m_nTick] = key;
+    m_nCacheBytes += bytes;
+}
+
+void WaterMeshDataset::Evict()
+{
+    while (m_nCacheBytes > m_nCacheMax && !m_oByAge.empty())
+    {
+        auto old = m_oByAge.begin();
+        auto it = m_oCache.find(old->second);
+        m_nCacheBytes -= it->second.bytes;
+        m_oCache.erase(it);
+        m_oByAge.erase(old);
+    }
+}
+
+struct FetchSink
+{
+    std::map<std::pair<int64_t, int64_t>, ResultPtr> *computed;
 };
 
-static int cache_sink(void *user, wm_block_result *res)
+static int fetch_sink(void *user, wm_block_result *res)
 {
-    auto *s = static_cast<CacheSink *>(user);
+    auto *s = static_cast<FetchSink *>(user);
     wm_block_result *copy = nullptr;
     try
     {
@@ -184,7 +251,7 @@ static int cache_sink(void *user, wm_block_result *res)
         memset(res, 0, sizeof *res);        /* ownership moved to copy */
         ResultPtr p(copy, ResultDeleter()); /* deletes copy if it throws */
         copy = nullptr;
-        (*s->cache)[{p->bx, p->by}] = p;
+        (*s->computed)[{p->bx, p->by}] = p;
         return TRUE;
     }
     catch (const std::exception &)
@@ -197,41 +264,48 @@ static int cache_sink(void *user, wm_block_result *res)
     }
 }
 
-bool WaterMeshDataset::GetBlocks(const OGREnvelope *env,
-                                 std::vector<ResultPtr> &out)
+bool WaterMeshDataset::Fetch(const int64_t *blocks, size_t n,
+                             std::vector<ResultPtr> *out)
 {
-    double spat[4];
-    if (env)
-    {
-        spat[0] = env->MinX;
-        spat[1] = env->MinY;
-        spat[2] = env->MaxX;
-        spat[3] = env->MaxY;
-    }
-    int64_t *blocks = nullptr;
-    size_t n = 0;
-    if (!WMSceneBlocks(m_poScene, env ? spat : nullptr, &blocks, &n))
-        return false;
+    std::map<BlockKey, ResultPtr> got;
     std::vector<int64_t> todo;
     for (size_t i = 0; i < n; i++)
-        if (!m_oCache.count({blocks[2 * i], blocks[2 * i + 1]}))
+    {
+        const BlockKey key{blocks[2 * i], blocks[2 * i + 1]};
+        auto it = m_oCache.find(key);
+        if (it == m_oCache.end())
         {
-            todo.push_back(blocks[2 * i]);
-            todo.push_back(blocks[2 * i + 1]);
+            todo.push_back(key.first);
+            todo.push_back(key.second);
+            continue;
         }
-    bool ok = true;
+        got[key] = it->second.r;
+        m_oByAge.erase(it->second.tick); /* used: youngest again */
+        it->second.tick = ++m_nTick;
+        m_oByAge[m_nTick] = key;
+    }
     if (!todo.empty())
     {
-        CacheSink sink{this, &m_oCache};
+        std::map<BlockKey, ResultPtr> computed;
+        FetchSink sink{&computed};
         WMRunStats st;
-        ok = WMRunBlocks(m_poScene, todo.data(), todo.size() / 2, cache_sink,
-                         &sink, nullptr, nullptr, &st) == CE_None;
+        if (WMRunBlocks(m_poScene, todo.data(), todo.size() / 2, fetch_sink,
+                        &sink, nullptr, nullptr, &st) != CE_None)
+            return false;
+        for (auto &kv : computed)
+        {
+            Remember(kv.second);
+            got[kv.first] = kv.second;
+        }
+        Evict();
     }
-    out.clear();
-    for (size_t i = 0; ok && i < n; i++)
-        out.push_back(m_oCache[{blocks[2 * i], blocks[2 * i + 1]}]);
-    VSIFree(blocks);
-    return ok;
+    if (out)
+    {
+        out->clear();
+        for (size_t i = 0; i < n; i++)
+            out->push_back(got[{blocks[2 * i], blocks[2 * i + 1]}]);
+    }
+    return true;
 }
 
 /* ------------------------------------------------------------------ */
@@ -264,22 +338,53 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
     {
         if (!m_bComputed)
         {
-            OGREnvelope env;
+            double spat[4];
             if (m_poFilterGeom)
+            {
+                OGREnvelope env;
                 m_poFilterGeom->getEnvelope(&env);
+                spat[0] = env.MinX;
+                spat[1] = env.MinY;
+                spat[2] = env.MaxX;
+                spat[3] = env.MaxY;
+            }
+            int64_t *blocks = nullptr;
+            size_t n = 0;
             m_bComputed = true;
-            if (!m_poDS->GetBlocks(m_poFilterGeom ? &env : nullptr, m_aoBlocks))
+            if (!WMSceneBlocks(m_poDS->m_poScene,
+                               m_poFilterGeom ? spat : nullptr, &blocks, &n))
                 return nullptr;
+            m_anBlocks.assign(blocks, blocks + 2 * n);
+            VSIFree(blocks);
+            m_aoChunk.clear();
+            m_iChunk0 = m_iBlock = m_iPoly = 0;
         }
-        while (m_iBlock < m_aoBlocks.size() &&
-               m_iPoly >= m_aoBlocks[m_iBlock]->npolys)
+        const size_t nblocks = m_anBlocks.size() / 2;
+        for (;;)
         {
+            if (m_iBlock >= nblocks)
+                return nullptr;
+            if (m_iBlock < m_iChunk0 ||
+                m_iBlock >= m_iChunk0 + m_aoChunk.size())
+            {
+                /* the next blocks, computed a chunk at a time */
+                const size_t k =
+                    std::min(m_poDS->ChunkBlocks(), nblocks - m_iBlock);
+                m_iChunk0 = m_iBlock;
+                if (!m_poDS->Fetch(m_anBlocks.data() + 2 * m_iBlock, k,
+                                   &m_aoChunk))
+                {
+                    m_aoChunk.clear();
+                    m_iBlock = nblocks; /* the error stands; stop */
+                    return nullptr;
+                }
+            }
+            if (m_iPoly < m_aoChunk[m_iBlock - m_iChunk0]->npolys)
+                break;
             m_iBlock++;
             m_iPoly = 0;
         }
-        if (m_iBlock >= m_aoBlocks.size())
-            return nullptr;
-        const wm_block_result *r = m_aoBlocks[m_iBlock].get();
+        const wm_block_result *r = m_aoChunk[m_iBlock - m_iChunk0].get();
         const size_t p = m_iPoly++;
         const WMScene *s = m_poDS->m_poScene;
         auto poFeature = new OGRFeature(m_poDefn);
@@ -320,13 +425,30 @@ GIntBig WaterMeshLayer::GetFeatureCount(int bForce)
         return OGRLayer::GetFeatureCount(bForce);
     try
     {
-        std::vector<ResultPtr> blocks;
-        if (!m_poDS->GetBlocks(nullptr, blocks))
+        /* every block's polygon count, computing (a chunk at a time, through
+         * the bounded cache) the blocks not seen yet */
+        int64_t *blocks = nullptr;
+        size_t n = 0;
+        if (!WMSceneBlocks(m_poDS->m_poScene, nullptr, &blocks, &n))
             return -1;
-        GIntBig n = 0;
-        for (const auto &b : blocks)
-            n += static_cast<GIntBig>(b->npolys);
-        return n;
+        std::vector<int64_t> todo;
+        for (size_t i = 0; i < n; i++)
+            if (!m_poDS->m_oCounts.count({blocks[2 * i], blocks[2 * i + 1]}))
+            {
+                todo.push_back(blocks[2 * i]);
+                todo.push_back(blocks[2 * i + 1]);
+            }
+        bool ok = true;
+        const size_t k = m_poDS->ChunkBlocks();
+        for (size_t i = 0; ok && i < todo.size() / 2; i += k)
+            ok = m_poDS->Fetch(todo.data() + 2 * i,
+                               std::min(k, todo.size() / 2 - i), nullptr);
+        GIntBig total = 0;
+        for (size_t i = 0; ok && i < n; i++)
+            total += static_cast<GIntBig>(
+                m_poDS->m_oCounts[{blocks[2 * i], blocks[2 * i + 1]}]);
+        VSIFree(blocks);
+        return ok ? total : -1;
     }
     catch (const std::exception &)
     {
@@ -471,6 +593,12 @@ GDALDataset *WaterMeshDataset::Open(GDALOpenInfo *poOpenInfo)
     {
         auto poDS = std::make_unique<WaterMeshDataset>();
         poDS->m_poScene = scene;
+        const double dfCacheMB =
+            CPLAtof(CPLGetConfigOption("WATERMESH_CACHE_MAX", "512"));
+        poDS->m_nCacheMax =
+            dfCacheMB > 0
+                ? static_cast<size_t>(std::min(dfCacheMB * 1048576.0, 1e15))
+                : 0;
         poDS->SetDescription(poOpenInfo->pszFilename);
         if (poOpenInfo->nOpenFlags & GDAL_OF_VECTOR)
         {
