@@ -469,16 +469,34 @@ static inline double seg_d2(double px, double py, double abx, double aby,
     return dx * dx + dy * dy;
 }
 
-/* v = min(v, |p - seg| - r) over a full tile. */
+/* Rows [*j0, *j1] of a tile whose sample (0, 0) is at lattice y Y that lie
+ * within `reach` (lattice units, plus one for rounding) of the y-extent of
+ * [a, b]; every other row is farther than reach from the segment in y
+ * alone, so a term clamped at reach cannot lower its samples' values. */
+static void row_span(int64_t Y, int64_t ay, int64_t by, double reach,
+                     int32_t *j0, int32_t *j1)
+{
+    const int64_t y0 = ay < by ? ay : by, y1 = ay > by ? ay : by;
+    const double lo = ceil(((double)(y0 - Y) - reach - 1.0) / WM_Q);
+    const double hi = floor(((double)(y1 - Y) + reach + 1.0) / WM_Q);
+    *j0 = lo < 0 ? 0 : (lo > TS1 ? TS1 : (int32_t)lo);
+    *j1 = hi < -1 ? -1 : (hi > TS1 - 1 ? TS1 - 1 : (int32_t)hi);
+}
+
+/* v = min(v, |p - seg| - r) over a full tile, v <= bandl: rows farther
+ * than r + bandl from the segment are left alone (the term exceeds v). */
 WM_CLONES
-static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v)
+static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
+                      double bandl)
 {
     const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
     const double len2 = abx * abx + aby * aby;
     const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
     const double ox = (double)(X - g->ax), oy = (double)(Y - g->ay);
     const double r = g->r;
-    for (int32_t j = 0; j < TS1; j++)
+    int32_t j0, j1;
+    row_span(Y, g->ay, g->by, r + bandl, &j0, &j1);
+    for (int32_t j = j0; j <= j1; j++)
     {
         const double py = oy + (double)j * WM_Q;
         double *row = v + j * TS1;
@@ -492,15 +510,20 @@ static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v)
     }
 }
 
-/* du2 = min(du2, d^2 to edge) over a full tile. */
+/* du2 = min(du2, d^2 to edge) over a full tile; rows farther than bandl
+ * from the edge are left alone (as if the edge were out of reach: the
+ * distance only matters up to the clamp). */
 WM_CLONES
-static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2)
+static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
+                      double bandl)
 {
     const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
     const double len2 = abx * abx + aby * aby;
     const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
     const double ox = (double)(X - g->ax), oy = (double)(Y - g->ay);
-    for (int32_t j = 0; j < TS1; j++)
+    int32_t j0, j1;
+    row_span(Y, g->ay, g->by, bandl, &j0, &j1);
+    for (int32_t j = j0; j <= j1; j++)
     {
         const double py = oy + (double)j * WM_Q;
         double *row = du2 + j * TS1;
@@ -544,13 +567,13 @@ wm_status wm_field_eval_c(void *user, const wm_field_batch *b,
         for (int32_t i = 0; i < TS1 * TS1; i++)
             v[i] = bandl;
         for (size_t i = b->seg_start[k]; i < b->seg_start[k + 1]; i++)
-            river_min(&s->segs[b->seg[i]], X, Y, v);
+            river_min(&s->segs[b->seg[i]], X, Y, v, bandl);
         for (size_t g = b->grp_start[k]; g < b->grp_start[k + 1]; g++)
         {
             for (int32_t j = 0; j < TS1 * TS1; j++)
                 du2[j] = INFINITY;
             for (size_t i = b->edge_start[g]; i < b->edge_start[g + 1]; i++)
-                edge_min2(&s->edges[b->edge[i]], X, Y, du2);
+                edge_min2(&s->edges[b->edge[i]], X, Y, du2, bandl);
             lake_min(du2, b->mask + g * TS1, v);
         }
         float *out = b->val + k * TS1 * TS1;
