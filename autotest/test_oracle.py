@@ -191,32 +191,23 @@ def test_area(scene, name):
             c['area_driver'], c['area_oracle'], c['rel_area_diff'], AREA_REL)
 
 
-@pytest.mark.parametrize('name', EXACT_RUNS)
-def test_hausdorff_no_simplify(scene, name):
+# Hausdorff limit per run, pixels: the method's bound, plus T = PIXEL_SIZE
+# (the default SIMPLIFY) where the run simplifies
+HAUSDORFF_LIMIT_PX = dict(
+    [(n, HAUSDORFF_EXACT_PX) for n in EXACT_RUNS] +
+    [(n, 1 + HAUSDORFF_SIMPLIFY_PX) for n in DEFAULT_RUNS] +
+    [(n, HAUSDORFF_PAPER_PX) for n in PAPER_EXACT_RUNS] +
+    [(n, 1 + HAUSDORFF_PAPER_PX) for n in PAPER_RUNS])
+
+
+@pytest.mark.parametrize('name', sorted(HAUSDORFF_LIMIT_PX))
+def test_hausdorff(scene, name):
     c = scene.comparison(name)
-    limit = HAUSDORFF_EXACT_PX * PIXEL_SIZE
+    limit = HAUSDORFF_LIMIT_PX[name] * PIXEL_SIZE
     assert c['hausdorff'] <= limit, \
-        'Hausdorff %.4f m (%.3f px) > %.4f m, worst at %s (driver->oracle %.4f, oracle->driver %.4f)' % (
-            c['hausdorff'], c['hausdorff_px'], limit, c['worst_at'], c['driver_to_oracle'], c['oracle_to_driver'])
-
-
-@pytest.mark.parametrize('name', DEFAULT_RUNS)
-def test_hausdorff_default_simplify(scene, name):
-    c = scene.comparison(name)
-    T = PIXEL_SIZE  # SIMPLIFY defaults to PIXEL_SIZE
-    limit = T + HAUSDORFF_SIMPLIFY_PX * PIXEL_SIZE
-    assert c['hausdorff'] <= limit, \
-        'Hausdorff %.4f m (%.3f px) > T + 0.5 px = %.4f m, worst at %s' % (
-            c['hausdorff'], c['hausdorff_px'], limit, c['worst_at'])
-
-
-@pytest.mark.parametrize('name', PAPER_EXACT_RUNS)
-def test_hausdorff_paper_no_simplify(scene, name):
-    c = scene.comparison(name)
-    limit = HAUSDORFF_PAPER_PX * PIXEL_SIZE
-    assert c['hausdorff'] <= limit, \
-        'METHOD=PAPER: Hausdorff %.4f m (%.3f px) > %.4f m, worst at %s' % (
-            c['hausdorff'], c['hausdorff_px'], limit, c['worst_at'])
+        '%s: Hausdorff %.4f m (%.3f px) > %.4f m, worst at %s (driver->oracle %.4f, oracle->driver %.4f)' % (
+            name, c['hausdorff'], c['hausdorff_px'], limit, c['worst_at'], c['driver_to_oracle'],
+            c['oracle_to_driver'])
 
 
 @pytest.mark.parametrize('name', PAPER_EXACT_RUNS + PAPER_RUNS)
@@ -224,15 +215,6 @@ def test_p99_paper(scene, name):
     c = scene.comparison(name)
     assert c['p99'] <= P99_PAPER_PX * PIXEL_SIZE, \
         'METHOD=PAPER: 99th percentile %.4f m > %g px' % (c['p99'], P99_PAPER_PX)
-
-
-@pytest.mark.parametrize('name', PAPER_RUNS)
-def test_hausdorff_paper_default_simplify(scene, name):
-    c = scene.comparison(name)
-    limit = PIXEL_SIZE + HAUSDORFF_PAPER_PX * PIXEL_SIZE
-    assert c['hausdorff'] <= limit, \
-        'METHOD=PAPER: Hausdorff %.4f m (%.3f px) > T + %g px = %.4f m, worst at %s' % (
-            c['hausdorff'], c['hausdorff_px'], HAUSDORFF_PAPER_PX, limit, c['worst_at'])
 
 
 def test_simplify_reduces_vertices(scene):

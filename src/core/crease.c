@@ -99,15 +99,8 @@ static int cmp_ins(const void *a, const void *b)
 static int push(void **buf, size_t *n, size_t *cap, const void *item,
                 size_t size)
 {
-    if (*n == *cap)
-    {
-        size_t nc = *cap ? 2 * *cap : 64;
-        void *p = realloc(*buf, nc * size);
-        if (!p)
-            return 0;
-        *buf = p;
-        *cap = nc;
-    }
+    if (!wm_grow(buf, cap, *n + 1, size))
+        return 0;
     memcpy((char *)*buf + *n * size, item, size);
     (*n)++;
     return 1;

@@ -619,22 +619,6 @@ static int uniform_tile(work *w, int32_t tx, int32_t ty, uint8_t *haspoly)
     return 0;
 }
 
-/* Grows *p to hold n elements of `size` bytes; 0 when out of memory. */
-static int reserve(void *p, size_t *cap, size_t n, size_t size)
-{
-    if (n <= *cap)
-        return 1;
-    size_t c = *cap ? *cap : 64;
-    while (c < n)
-        c *= 2;
-    void *q = realloc(*(void **)p, c * size);
-    if (!q)
-        return 0;
-    *(void **)p = q;
-    *cap = c;
-    return 1;
-}
-
 /* A batch under assembly: the arrays behind a wm_field_batch, reused from
  * one batch to the next. */
 typedef struct
@@ -665,7 +649,8 @@ static wm_status build_batch(const work *w, const size_t *tiles, size_t n,
 {
     const wm_field *f = w->f;
     size_t nseg = 0, ngrp = 0, nedge = 0;
-    if (!reserve(&bb->edge_start, &bb->cap_grp, 1, sizeof *bb->edge_start))
+    if (!wm_grow((void **)&bb->edge_start, &bb->cap_grp, 1,
+                 sizeof *bb->edge_start))
         return WM_ERR_NOMEM;
     bb->seg_start[0] = bb->grp_start[0] = bb->edge_start[0] = 0;
     for (size_t k = 0; k < n; k++)
@@ -676,7 +661,7 @@ static wm_status build_batch(const work *w, const size_t *tiles, size_t n,
         bb->org[2 * k] = w->X0 + (int64_t)c0 * WM_Q;
         bb->org[2 * k + 1] = w->Y0 + (int64_t)r0 * WM_Q;
         const size_t s0 = w->tseg_start[t], s1 = w->tseg_start[t + 1];
-        if (!reserve(&bb->seg, &bb->cap_seg, nseg + (s1 - s0) + 1,
+        if (!wm_grow((void **)&bb->seg, &bb->cap_seg, nseg + (s1 - s0) + 1,
                      sizeof *bb->seg))
             return WM_ERR_NOMEM;
         memcpy(bb->seg + nseg, w->tseg + s0, (s1 - s0) * sizeof *bb->seg);
@@ -691,11 +676,11 @@ static wm_status build_batch(const work *w, const size_t *tiles, size_t n,
             const size_t i0 = i;
             while (i < e1 && w->tedge_poly[i] == p)
                 i++;
-            if (!reserve(&bb->edge, &bb->cap_edge, nedge + (i - i0) + 1,
-                         sizeof *bb->edge) ||
-                !reserve(&bb->mask, &bb->cap_mask, (ngrp + 1) * TS1,
+            if (!wm_grow((void **)&bb->edge, &bb->cap_edge,
+                         nedge + (i - i0) + 1, sizeof *bb->edge) ||
+                !wm_grow((void **)&bb->mask, &bb->cap_mask, (ngrp + 1) * TS1,
                          sizeof *bb->mask) ||
-                !reserve(&bb->edge_start, &bb->cap_grp, ngrp + 2,
+                !wm_grow((void **)&bb->edge_start, &bb->cap_grp, ngrp + 2,
                          sizeof *bb->edge_start))
                 return WM_ERR_NOMEM;
             memcpy(bb->edge + nedge, w->tedge + i0,

@@ -49,7 +49,7 @@ void wm_rings_free(wm_rings *r)
     memset(r, 0, sizeof *r);
 }
 
-static int grow(void **buf, size_t *cap, size_t need, size_t elem)
+int wm_grow(void **buf, size_t *cap, size_t need, size_t elem)
 {
     if (need <= *cap)
         return 1;
@@ -70,7 +70,7 @@ static int grow(void **buf, size_t *cap, size_t need, size_t elem)
 
 wm_status wm_rings_push(wm_rings *r, wm_pt p)
 {
-    if (!grow((void **)&r->pts, &r->pts_cap, r->npts + 1, sizeof *r->pts))
+    if (!wm_grow((void **)&r->pts, &r->pts_cap, r->npts + 1, sizeof *r->pts))
         return WM_ERR_NOMEM;
     r->pts[r->npts++] = p;
     return WM_OK;
@@ -78,8 +78,8 @@ wm_status wm_rings_push(wm_rings *r, wm_pt p)
 
 wm_status wm_rings_close(wm_rings *r)
 {
-    if (!grow((void **)&r->start, &r->start_cap, r->nrings + 2,
-              sizeof *r->start))
+    if (!wm_grow((void **)&r->start, &r->start_cap, r->nrings + 2,
+                 sizeof *r->start))
         return WM_ERR_NOMEM;
     if (r->nrings == 0)
         r->start[0] = 0;

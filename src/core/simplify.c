@@ -108,25 +108,6 @@ typedef struct
 
 /* ---- small helpers ------------------------------------------------------- */
 
-static int s_grow(void **buf, size_t *cap, size_t need, size_t elem)
-{
-    if (need <= *cap)
-        return 1;
-    size_t ncap = *cap ? *cap : 64;
-    while (ncap < need)
-    {
-        if (ncap > SIZE_MAX / 2 / elem)
-            return 0;
-        ncap *= 2;
-    }
-    void *p = realloc(*buf, ncap * elem);
-    if (!p)
-        return 0;
-    *buf = p;
-    *cap = ncap;
-    return 1;
-}
-
 static uint32_t s_nxt(const simp *sp, uint32_t i)
 {
     const size_t r = sp->ring_of[i];
@@ -149,8 +130,8 @@ static wm_status s_push_work(simp *sp, uint32_t u, uint32_t v)
 {
     if (sp->work_head == sp->nwork)
         sp->work_head = sp->nwork = 0;
-    if (!s_grow((void **)&sp->work, &sp->work_cap, sp->nwork + 1,
-                sizeof *sp->work))
+    if (!wm_grow((void **)&sp->work, &sp->work_cap, sp->nwork + 1,
+                 sizeof *sp->work))
         return wm_fail(sp->ctx, WM_ERR_NOMEM, "simplify: out of memory");
     sp->work[sp->nwork].u = u;
     sp->work[sp->nwork].v = v;
@@ -568,8 +549,8 @@ static wm_status s_resolve(simp *sp)
             if ((st = s_insert(sp, s_key(cx, cy), &slot)) != WM_OK)
                 return st;
             if (sp->nent >= (size_t)S_NONE ||
-                !s_grow((void **)&sp->ent, &sp->ent_cap, sp->nent + 1,
-                        sizeof *sp->ent))
+                !wm_grow((void **)&sp->ent, &sp->ent_cap, sp->nent + 1,
+                         sizeof *sp->ent))
                 return wm_fail(sp->ctx, WM_ERR_NOMEM,
                                "simplify: out of memory (grid entries)");
             sp->ent[sp->nent].u = A.u;
@@ -710,8 +691,8 @@ static wm_status s_fix_queries(simp *sp, s_query *qs, size_t nq, int *did)
                         if (q.y < y0 || q.y > y1 || !s_span_parity(sp, u, v, q))
                             continue;
                         par[pts[m].k] ^= 1;
-                        if (!s_grow((void **)&hits, &hit_cap, nhit + 1,
-                                    sizeof *hits))
+                        if (!wm_grow((void **)&hits, &hit_cap, nhit + 1,
+                                     sizeof *hits))
                         {
                             st = wm_fail(sp->ctx, WM_ERR_NOMEM,
                                          "simplify: out of memory");
@@ -727,8 +708,8 @@ static wm_status s_fix_queries(simp *sp, s_query *qs, size_t nq, int *did)
             for (size_t h = 0; h < nhit; h++)
                 if (par[hits[h].u])
                 {
-                    if (!s_grow((void **)&marks, &mark_cap, nmark + 1,
-                                sizeof *marks))
+                    if (!wm_grow((void **)&marks, &mark_cap, nmark + 1,
+                                 sizeof *marks))
                     {
                         st = wm_fail(sp->ctx, WM_ERR_NOMEM,
                                      "simplify: out of memory");
@@ -1069,7 +1050,7 @@ wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
                 cand[nc].S = (uint32_t)p;
                 cand[nc++].t = (uint32_t)p2;
             }
-            if (!s_grow((void **)&qs, &q_cap, nq + nc, sizeof *qs))
+            if (!wm_grow((void **)&qs, &q_cap, nq + nc, sizeof *qs))
             {
                 st = wm_fail(ctx, WM_ERR_NOMEM, "simplify: out of memory");
                 goto cleanup;

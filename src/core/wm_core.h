@@ -99,6 +99,15 @@ extern "C"
      */
     size_t *wm_csr_begin(size_t *start, size_t nrows);
 
+    /**
+     * Grows the array *buf (of elements of `elem` bytes, capacity *cap) to
+     * hold at least `need`, doubling from 16; *buf and *cap are left as they
+     * were when that fails.
+     *
+     * @return 1, or 0 when out of memory or the size overflows
+     */
+    int wm_grow(void **buf, size_t *cap, size_t need, size_t elem);
+
     /** Number of vertices of ring i. */
     static inline size_t wm_rings_len(const wm_rings *r, size_t i)
     {
