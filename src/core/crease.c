@@ -54,23 +54,9 @@ typedef struct
     uint32_t item;
 } prim;
 
-typedef struct
-{
-    uint64_t key;
-    uint32_t ref;
-} cellref;
-
 static uint64_t ckey(int64_t cx, int64_t cy)
 {
     return ((uint64_t)(uint32_t)(int32_t)cy << 32) | (uint32_t)(int32_t)cx;
-}
-
-static int cmp_cellref(const void *a, const void *b)
-{
-    const cellref *x = a, *y = b;
-    if (x->key != y->key)
-        return x->key < y->key ? -1 : 1;
-    return (x->ref > y->ref) - (x->ref < y->ref);
 }
 
 typedef struct
@@ -388,14 +374,20 @@ static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
  * 5 degree wedge (pixel / (2 tan 2.5 deg) = 11.5 px) is within reach. */
 #define WM_CREASE_REACH (16 * WM_Q)
 
-/* The rings' edges in a dense grid over the block (CSR by cell). */
+/* The rings' edges in a dense grid over the block (CSR by cell). With an
+ * `active` mask only the marked cells hold their edges: a later pass looks
+ * only near the corners just inserted, and a query reaching an unmarked
+ * cell completes the grid first (visit_edges), so a query never misses an
+ * edge. */
 typedef struct
 {
     const wm_rings *r;
+    int32_t S;       /* block side, lattice units */
     int32_t side;    /* cells per side */
     size_t *start;   /* side*side + 1 */
     uint32_t *edges; /* edge k = from vertex k to its successor */
     size_t *ring_of; /* vertex -> ring */
+    uint8_t *active; /* side*side, or NULL: every cell registered (owned) */
 } ringgrid;
 
 static size_t succ(const wm_rings *r, const size_t *ring_of, size_t k)
@@ -412,23 +404,23 @@ static size_t pred(const wm_rings *r, const size_t *ring_of, size_t k)
 
 static int32_t cell_of(const ringgrid *g, int32_t v)
 {
-    const int32_t c = v / RCELL;
-    return c < 0 ? 0 : (c >= g->side ? g->side - 1 : c);
+    if (v < 0)
+        return 0;
+    const int32_t c = v / RCELL; /* v >= 0: a shift */
+    return c >= g->side ? g->side - 1 : c;
 }
 
-static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S)
+/* Registers the edges of g->r (in the cells of g->active, or all), in a
+ * grid whose ring_of is filled; (re)allocates start and edges. */
+static wm_status fill_ringgrid(ringgrid *g)
 {
-    g->r = r;
-    g->side = S / RCELL + 1;
+    const wm_rings *r = g->r;
     const size_t ncell = (size_t)g->side * (size_t)g->side;
-    g->ring_of = malloc((r->npts + 1) * sizeof *g->ring_of);
+    free(g->start);
+    free(g->edges);
+    g->edges = NULL;
     g->start = calloc(ncell + 1, sizeof *g->start);
-    if (!g->ring_of || !g->start)
-        return WM_ERR_NOMEM;
-    for (size_t ri = 0; ri < r->nrings; ri++)
-        for (size_t k = r->start[ri]; k < r->start[ri + 1]; k++)
-            g->ring_of[k] = ri;
-    if (r->npts >= UINT32_MAX)
+    if (!g->start)
         return WM_ERR_NOMEM;
     size_t *cur = NULL;
     for (int pass = 0; pass < 2; pass++)
@@ -444,6 +436,8 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S)
                 for (int32_t cx = x0; cx <= x1; cx++)
                 {
                     const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
+                    if (g->active && !g->active[c])
+                        continue;
                     if (pass == 0)
                         g->start[c + 1]++;
                     else
@@ -465,21 +459,51 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S)
     return WM_OK;
 }
 
+/* The grid of rings r over a block of side S: every edge registered, or
+ * (active != NULL, owned by the grid from here on) those in its cells. */
+static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S,
+                                uint8_t *active)
+{
+    g->r = r;
+    g->S = S;
+    g->side = S / RCELL + 1;
+    g->active = active;
+    g->ring_of = malloc((r->npts + 1) * sizeof *g->ring_of);
+    if (!g->ring_of || r->npts >= UINT32_MAX)
+        return WM_ERR_NOMEM;
+    for (size_t ri = 0; ri < r->nrings; ri++)
+        for (size_t k = r->start[ri]; k < r->start[ri + 1]; k++)
+            g->ring_of[k] = ri;
+    return fill_ringgrid(g);
+}
+
 static void free_ringgrid(ringgrid *g)
 {
     free(g->start);
     free(g->edges);
     free(g->ring_of);
+    free(g->active);
 }
 
 /* Calls fn(edge k) for each edge registered in cells touching the box
- * [x0,x1]x[y0,y1] (an edge may be visited more than once). Returns 0 as
- * soon as fn does. */
-static int visit_edges(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
+ * [x0,x1]x[y0,y1] (an edge may be visited more than once), first
+ * registering every edge if the box reaches a cell outside g->active.
+ * Returns 0 as soon as fn does, -1 out of memory, else 1. */
+static int visit_edges(ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
                        int32_t y1, int (*fn)(void *, size_t), void *arg)
 {
     const int32_t cx0 = cell_of(g, x0), cx1 = cell_of(g, x1);
     const int32_t cy0 = cell_of(g, y0), cy1 = cell_of(g, y1);
+    for (int32_t cy = cy0; g->active && cy <= cy1; cy++)
+        for (int32_t cx = cx0; cx <= cx1; cx++)
+            if (!g->active[(size_t)cy * (size_t)g->side + (size_t)cx])
+            {
+                free(g->active);
+                g->active = NULL;
+                if (fill_ringgrid(g) != WM_OK)
+                    return -1;
+                break;
+            }
     for (int32_t cy = cy0; cy <= cy1; cy++)
         for (int32_t cx = cx0; cx <= cx1; cx++)
         {
@@ -574,9 +598,9 @@ static int check_fn(void *arg, size_t k)
     return 1;
 }
 
-/* True when c may be inserted into edge ka (to its successor) of the
- * current rings: see the file comment, step 4. */
-static int can_insert(const inputs *in, const ringgrid *g, size_t ka, wm_pt c,
+/* 1 when c may be inserted into edge ka (to its successor) of the current
+ * rings (see the file comment, step 4), 0 when not, -1 out of memory. */
+static int can_insert(const inputs *in, ringgrid *g, size_t ka, wm_pt c,
                       int32_t S, const uint8_t *split, const insertion *ins,
                       size_t nins)
 {
@@ -592,9 +616,10 @@ static int can_insert(const inputs *in, const ringgrid *g, size_t ka, wm_pt c,
     check ck = {g, ka, kb, a, b, c, 1};
     const int32_t x0 = a.x < b.x ? a.x : b.x, x1 = a.x > b.x ? a.x : b.x;
     const int32_t y0 = a.y < b.y ? a.y : b.y, y1 = a.y > b.y ? a.y : b.y;
-    visit_edges(g, (x0 < c.x ? x0 : c.x) - 1, (y0 < c.y ? y0 : c.y) - 1,
-                (x1 > c.x ? x1 : c.x) + 1, (y1 > c.y ? y1 : c.y) + 1, check_fn,
-                &ck);
+    if (visit_edges(g, (x0 < c.x ? x0 : c.x) - 1, (y0 < c.y ? y0 : c.y) - 1,
+                    (x1 > c.x ? x1 : c.x) + 1, (y1 > c.y ? y1 : c.y) + 1,
+                    check_fn, &ck) < 0)
+        return -1;
     /* and against corners inserted earlier in this pass */
     for (size_t j = 0; ck.ok && j < nins; j++)
     {
@@ -649,6 +674,34 @@ static int near_hot(const uint64_t *hot, size_t nhot, wm_pt p)
     return 0;
 }
 
+/* The ring grid cells a pass after the first needs (owned by the caller):
+ * its candidates are in the 3 x 3 hot cells around a corner of `hot`, their
+ * searches reach WM_CREASE_REACH around them, and the edges they may split
+ * a little farther; two cells of margin cover that (a query beyond them
+ * completes the grid). NULL when out of memory. */
+static uint8_t *hot_cells(const uint64_t *hot, size_t nhot, int32_t S)
+{
+    const int32_t side = S / RCELL + 1, per = HOT_CELL / RCELL;
+    uint8_t *a = calloc((size_t)side * (size_t)side, 1);
+    if (!a)
+        return NULL;
+    for (size_t i = 0; i < nhot; i++)
+    {
+        const int32_t hx = (int32_t)(uint32_t)(hot[i] & 0xffffffffu);
+        const int32_t hy = (int32_t)(uint32_t)(hot[i] >> 32);
+        int32_t x0 = (hx - 1) * per - 2, x1 = (hx + 2) * per + 1;
+        int32_t y0 = (hy - 1) * per - 2, y1 = (hy + 2) * per + 1;
+        x0 = x0 < 0 ? 0 : x0;
+        y0 = y0 < 0 ? 0 : y0;
+        x1 = x1 >= side ? side - 1 : x1;
+        y1 = y1 >= side ? side - 1 : y1;
+        for (int32_t cy = y0; cy <= y1; cy++)
+            memset(a + (size_t)cy * (size_t)side + (size_t)x0, 1,
+                   (size_t)(x1 - x0 + 1));
+    }
+    return a;
+}
+
 /* One pass: tries the candidates against the current rings and rebuilds
  * them with the accepted corners; *ninserted says how many. With hot
  * (sorted cell keys of the corners the previous pass inserted), only the
@@ -665,11 +718,12 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
     size_t nins = 0, inscap = 0;
     uint8_t *split = NULL;
     ringgrid g;
-    wm_rings out;
     memset(&g, 0, sizeof g);
-    memset(&out, 0, sizeof out);
     *ninserted = 0;
-    st = build_ringgrid(&g, rings, S);
+    uint8_t *active = hot ? hot_cells(hot, nhot, S) : NULL;
+    if (hot && !active)
+        goto nomem;
+    st = build_ringgrid(&g, rings, S, active);
     if (st != WM_OK)
         goto nomem;
     split = calloc(rings->npts + 1, 1);
@@ -686,14 +740,17 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
          * within a quarter pixel), then up to WM_CREASE_REACH */
         nearest nr = {&g, c.x, c.y, INFINITY, SIZE_MAX};
         int32_t R = WM_Q;
-        visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn, &nr);
+        if (visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
+                        &nr) < 0)
+            goto nomem;
         if (nr.best <= WM_Q / 4.0)
             continue;
         if (nr.best > R)
         {
             R = WM_CREASE_REACH;
-            visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
-                        &nr);
+            if (visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
+                            &nr) < 0)
+                goto nomem;
         }
         if (nr.edge == SIZE_MAX || nr.best > R)
             continue;
@@ -706,8 +763,13 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
                                  pred(rings, g.ring_of, nr.edge)};
         size_t ka = SIZE_MAX;
         for (int t = 0; t < 3 && ka == SIZE_MAX; t++)
-            if (can_insert(in, &g, tries[t], c, S, split, ins, nins))
+        {
+            const int ok = can_insert(in, &g, tries[t], c, S, split, ins, nins);
+            if (ok < 0)
+                goto nomem;
+            if (ok)
                 ka = tries[t];
+        }
         if (ka == SIZE_MAX)
             continue;
         const size_t kb = succ(rings, g.ring_of, ka);
@@ -727,27 +789,27 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
     for (size_t i = 0; i < nins; i++)
         (*newhot)[i] = hot_key(ins[i].p, 0, 0);
     qsort(*newhot, nins, sizeof **newhot, cmp_u64);
-    /* rebuild the rings with the corners */
+    /* insert the corners in place: new ring starts, then the points moved
+     * up from the back */
     qsort(ins, nins, sizeof *ins, cmp_ins);
-    size_t j = 0;
-    for (size_t ri = 0; ri < rings->nrings; ri++)
+    if (!wm_grow((void **)&rings->pts, &rings->pts_cap, rings->npts + nins,
+                 sizeof *rings->pts))
+        goto nomem;
+    for (size_t ri = 1, j = 0; ri <= rings->nrings; ri++)
     {
-        for (size_t k = rings->start[ri]; k < rings->start[ri + 1]; k++)
-        {
-            if (wm_rings_push(&out, rings->pts[k]) != WM_OK)
-                goto nomem;
-            if (j < nins && ins[j].seg == k)
-                if (wm_rings_push(&out, ins[j++].p) != WM_OK)
-                    goto nomem;
-        }
-        if (wm_rings_close(&out) != WM_OK)
-            goto nomem;
+        while (j < nins && ins[j].seg < rings->start[ri])
+            j++;
+        rings->start[ri] += j;
     }
+    for (size_t j = nins, src = rings->npts, dst = rings->npts + nins; j-- > 0;)
     {
-        const wm_rings tmp = *rings;
-        *rings = out;
-        out = tmp;
+        const size_t run = src - (ins[j].seg + 1);
+        src -= run;
+        dst -= run;
+        memmove(rings->pts + dst, rings->pts + src, run * sizeof *rings->pts);
+        rings->pts[--dst] = ins[j].p;
     }
+    rings->npts += nins;
     *ninserted = nins;
     goto cleanup;
 nomem:
@@ -756,7 +818,6 @@ cleanup:
     free(ins);
     free(split);
     free_ringgrid(&g);
-    wm_rings_free(&out);
     return st;
 }
 
@@ -766,8 +827,8 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     wm_status st = WM_OK;
     prim *pr = NULL;
     size_t npr = 0, prcap = 0;
-    cellref *pc = NULL;
-    size_t npc = 0, pccap = 0;
+    size_t *pcs = NULL, *pcur = NULL; /* primitives by cell (CSR) */
+    uint32_t *pcr = NULL;
     wm_pt *cand = NULL;
     size_t ncand = 0, candcap = 0;
 
@@ -836,41 +897,59 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     if (npr > UINT32_MAX)
         goto cleanup;
 
-    /* 2. candidates: pairs sharing a grid cell, found once (in the cell
-     * holding the intersection) */
+    /* 2. candidates: pairs sharing a grid cell (CSR over the cells of the
+     * block grown by 4 px), found once (in the cell holding the
+     * intersection) */
     const double PC = 16.0 * WM_Q;
-    for (size_t i = 0; i < npr; i++)
+    const int64_t cmin = (int64_t)floor(lo / PC);
+    const int64_t cside = (int64_t)floor(hi / PC) - cmin + 1;
+    const size_t ncell = (size_t)(cside * cside);
+    pcs = calloc(ncell + 1, sizeof *pcs);
+    if (!pcs)
+        goto nomem;
+    for (int pass = 0; pass < 2; pass++)
     {
-        double b[4];
-        prim_box(&pr[i], b);
-        b[0] = fmax(b[0], lo);
-        b[1] = fmax(b[1], lo);
-        b[2] = fmin(b[2], hi);
-        b[3] = fmin(b[3], hi);
-        if (b[0] > b[2] || b[1] > b[3])
-            continue;
-        for (int64_t cy = (int64_t)floor(b[1] / PC);
-             cy <= (int64_t)floor(b[3] / PC); cy++)
-            for (int64_t cx = (int64_t)floor(b[0] / PC);
-                 cx <= (int64_t)floor(b[2] / PC); cx++)
-            {
-                const cellref c = {ckey(cx, cy), (uint32_t)i};
-                if (!push((void **)&pc, &npc, &pccap, &c, sizeof c))
-                    goto nomem;
-            }
+        for (size_t i = 0; i < npr; i++)
+        {
+            double b[4];
+            prim_box(&pr[i], b);
+            b[0] = fmax(b[0], lo);
+            b[1] = fmax(b[1], lo);
+            b[2] = fmin(b[2], hi);
+            b[3] = fmin(b[3], hi);
+            if (b[0] > b[2] || b[1] > b[3])
+                continue;
+            const int64_t x0 = (int64_t)floor(b[0] / PC) - cmin;
+            const int64_t x1 = (int64_t)floor(b[2] / PC) - cmin;
+            const int64_t y0 = (int64_t)floor(b[1] / PC) - cmin;
+            const int64_t y1 = (int64_t)floor(b[3] / PC) - cmin;
+            for (int64_t cy = y0; cy <= y1; cy++)
+                for (int64_t cx = x0; cx <= x1; cx++)
+                {
+                    const size_t c = (size_t)(cy * cside + cx);
+                    if (pass == 0)
+                        pcs[c + 1]++;
+                    else
+                        pcr[pcur[c]++] = (uint32_t)i;
+                }
+        }
+        if (pass == 0)
+        {
+            pcur = wm_csr_begin(pcs, ncell);
+            pcr = malloc((pcs[ncell] + 1) * sizeof *pcr);
+            if (!pcur || !pcr)
+                goto nomem;
+        }
     }
-    qsort(pc, npc, sizeof *pc, cmp_cellref);
-    for (size_t a = 0; a < npc;)
+    for (size_t cell = 0; cell < ncell; cell++)
     {
-        size_t z = a;
-        while (z < npc && pc[z].key == pc[a].key)
-            z++;
-        const int64_t cx = (int32_t)(uint32_t)(pc[a].key & 0xffffffffu);
-        const int64_t cy = (int32_t)(uint32_t)(pc[a].key >> 32);
+        const size_t a = pcs[cell], z = pcs[cell + 1];
+        const int64_t cx = (int64_t)(cell % (size_t)cside) + cmin;
+        const int64_t cy = (int64_t)(cell / (size_t)cside) + cmin;
         for (size_t i = a; i < z; i++)
             for (size_t j = i + 1; j < z; j++)
             {
-                const prim *p = &pr[pc[i].ref], *q = &pr[pc[j].ref];
+                const prim *p = &pr[pcr[i]], *q = &pr[pcr[j]];
                 if (p->item == q->item)
                     continue;
                 dpt hit[2];
@@ -896,7 +975,6 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
                         goto nomem;
                 }
             }
-        a = z;
     }
     if (ncand == 0)
         goto cleanup;
@@ -932,7 +1010,9 @@ cleanup:
     free(in.cseg);
     free(in.wide);
     free(pr);
-    free(pc);
+    free(pcs);
+    free(pcur);
+    free(pcr);
     free(cand);
     return st;
 }

@@ -24,14 +24,14 @@
  * containment.
  *
  * Acceleration: the non-horizontal edges are registered in a uniform grid
- * (CSR, square cells, about one cell per four edges) in every cell their
- * segment passes through (row by row, exact integer bounds, a superset of
- * the cells). A query walks the cells of q's row from q's column leftwards
- * and stops as soon as the best crossing lies in the cell just scanned.
- * Building is O(n + total registrations); a query costs the edges of the
- * cells it visits: about O(n) overall for typical rings (many short edges,
- * rings spread over the block), no rings^2 term. Adversarial layouts (many
- * rays crossing long runs of crowded cells) cost more, up to
+ * (CSR, square cells of a power-of-two side, one cell per one to four
+ * edges) in every cell their segment passes through (row by row, exact
+ * integer bounds, a superset of the cells). A query walks the cells of q's row
+ * from q's column leftwards and stops as soon as the best crossing lies in the
+ * cell just scanned. Building is O(n + total registrations); a query costs the
+ * edges of the cells it visits: about O(n) overall for typical rings (many
+ * short edges, rings spread over the block), no rings^2 term. Adversarial
+ * layouts (many rays crossing long runs of crowded cells) cost more, up to
  * O(rings * n / cells); extraction output is not like that.
  *
  * Complexity: O(n) memory; time O(n + sum over queries of scanned cells).
@@ -54,7 +54,8 @@
 typedef struct
 {
     int64_t ax, ay, bx, by; /* endpoints, a has the lower (or equal) y */
-    int64_t ox, oy, s;      /* grid origin and cell size */
+    int64_t ox, oy, s;      /* grid origin and cell size (1 << k) */
+    int k;
     int64_t colmin, colmax; /* columns of the segment's bounding box */
     int64_t row0, row, row_end, col, col_end;
 } h_walk;
@@ -92,16 +93,18 @@ static void h_walk_row(h_walk *w)
     const int64_t na = dx * (ylo - w->ay), nb = dx * (yhi - w->ay);
     const int64_t lo = w->ax + h_floordiv(na < nb ? na : nb, dy);
     const int64_t hi = w->ax + h_ceildiv(na > nb ? na : nb, dy);
-    w->col = h_floordiv(lo - w->ox, w->s);
-    w->col_end = h_floordiv(hi - w->ox, w->s);
+    w->col = (lo - w->ox) >> w->k; /* lo, hi >= ox */
+    w->col_end = (hi - w->ox) >> w->k;
     if (w->col < w->colmin)
         w->col = w->colmin;
     if (w->col_end > w->colmax)
         w->col_end = w->colmax;
 }
 
+/* The cells of segment ab in the grid of cells of side 1 << k from
+ * (ox, oy), both ends at or above and right of it. */
 static void h_walk_init(h_walk *w, wm_pt a, wm_pt b, int64_t ox, int64_t oy,
-                        int64_t s)
+                        int k)
 {
     if (b.y < a.y)
     {
@@ -115,11 +118,12 @@ static void h_walk_init(h_walk *w, wm_pt a, wm_pt b, int64_t ox, int64_t oy,
     w->by = b.y;
     w->ox = ox;
     w->oy = oy;
-    w->s = s;
-    w->colmin = h_floordiv((int64_t)(a.x < b.x ? a.x : b.x) - ox, s);
-    w->colmax = h_floordiv((int64_t)(a.x > b.x ? a.x : b.x) - ox, s);
-    w->row = h_floordiv((int64_t)a.y - oy, s);
-    w->row_end = h_floordiv((int64_t)b.y - oy, s);
+    w->s = (int64_t)1 << k;
+    w->k = k;
+    w->colmin = ((int64_t)(a.x < b.x ? a.x : b.x) - ox) >> k;
+    w->colmax = ((int64_t)(a.x > b.x ? a.x : b.x) - ox) >> k;
+    w->row = ((int64_t)a.y - oy) >> k;
+    w->row_end = ((int64_t)b.y - oy) >> k;
     w->row0 = w->row;
     h_walk_row(w);
 }
@@ -159,6 +163,7 @@ wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
     size_t nedges = 0, ncells = 0, nent = 0;
     int64_t xmin = INT64_MAX, ymin = INT64_MAX, xmax = INT64_MIN,
             ymax = INT64_MIN, s = 1, cols = 1, rows = 1;
+    int k = 0; /* cell side s = 1 << k */
 
     if (nr == 0)
         return WM_OK;
@@ -215,16 +220,17 @@ wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
     {
         const double w = (double)(xmax - xmin + 1);
         const double h = (double)(ymax - ymin + 1);
-        s = (int64_t)ceil(sqrt(w * h * 4.0 / (double)nedges));
-        if (s < 1)
-            s = 1;
+        const double want = ceil(sqrt(w * h * 4.0 / (double)nedges));
+        while ((double)((int64_t)1 << k) < want)
+            k++; /* a power of two: cells by shifts */
         for (;;)
         {
-            cols = (xmax - xmin) / s + 1;
-            rows = (ymax - ymin) / s + 1;
+            s = (int64_t)1 << k;
+            cols = ((xmax - xmin) >> k) + 1;
+            rows = ((ymax - ymin) >> k) + 1;
             if ((double)cols * (double)rows <= 4.0 * (double)nedges + 64.0)
                 break;
-            s *= 2;
+            k++;
         }
         ncells = (size_t)cols * (size_t)rows;
     }
@@ -244,7 +250,7 @@ wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
             int64_t cx, cy;
             if (P[i].y == P[j].y)
                 continue;
-            h_walk_init(&w, P[i], P[j], xmin, ymin, s);
+            h_walk_init(&w, P[i], P[j], xmin, ymin, k);
             while (h_walk_next(&w, &cx, &cy))
             {
                 const size_t c = (size_t)(cy * cols + cx);
@@ -282,15 +288,15 @@ wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
         if (qidx[r] == H_NONE)
             continue;
         const wm_pt q = P[qidx[r]];
-        const int64_t row = (q.y - ymin) / s;
+        const int64_t row = (q.y - ymin) >> k;
         int64_t bestN = 0, bestD = 0, bestdx = 0;
         size_t best = SIZE_MAX;
-        for (int64_t c = (q.x - xmin) / s; c >= 0; c--)
+        for (int64_t c = (q.x - xmin) >> k; c >= 0; c--)
         {
             const size_t ci = (size_t)(row * cols + c);
-            for (size_t k = cell[ci]; k < cell[ci + 1]; k++)
+            for (size_t e = cell[ci]; e < cell[ci + 1]; e++)
             {
-                const size_t i = ent[k];
+                const size_t i = ent[e];
                 if (ring_of[i] == r)
                     continue;
                 const size_t j = h_next(rings, ring_of, i);

@@ -92,7 +92,7 @@ wm_i128 wm_ring_area2(const wm_pt *pts, size_t n)
     wm_i128 a = 0;
     for (size_t i = 0; i < n; i++)
     {
-        const wm_pt p = pts[i], q = pts[(i + 1) % n];
+        const wm_pt p = pts[i], q = pts[i + 1 < n ? i + 1 : 0];
         a += (wm_i128)((int64_t)p.x * q.y - (int64_t)q.x * p.y);
     }
     return a;
