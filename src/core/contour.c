@@ -163,6 +163,38 @@ static int cell(state *s, int32_t c, int32_t r, const float *p)
     return 1;
 }
 
+int wm_contour_cell_edge(const wm_field *f, int32_t c, int32_t r, wm_pt *a,
+                         wm_pt *b)
+{
+    const float v[4] = {wm_field_at(f, c, r), wm_field_at(f, c + 1, r),
+                        wm_field_at(f, c + 1, r + 1), wm_field_at(f, c, r + 1)};
+    const int w[4] = {v[0] <= 0, v[1] <= 0, v[2] <= 0, v[3] <= 0};
+    const int32_t X = c * WM_Q, Y = r * WM_Q;
+    int nout = 0, nin = 0;
+    for (int k = 0; k < 4; k++)
+    {
+        if (w[k] == w[(k + 1) & 3])
+            continue;
+        /* cell()'s crossing on edge k (corner k to k + 1), from the edge's
+         * lower sample */
+        const wm_pt p = k == EB   ? crossing(v[0], v[1], X, Y, 0)
+                        : k == ER ? crossing(v[1], v[2], X + WM_Q, Y, 1)
+                        : k == ET ? crossing(v[3], v[2], X, Y + WM_Q, 0)
+                                  : crossing(v[0], v[3], X, Y, 1);
+        if (w[k])
+        {
+            *a = p; /* an out edge: where the segment starts */
+            nout++;
+        }
+        else
+        {
+            *b = p;
+            nin++;
+        }
+    }
+    return nout == 1 && nin == 1;
+}
+
 /* Position along the square, counter-clockwise from (0,0). */
 static int64_t perim(wm_pt p, int32_t S)
 {
@@ -196,12 +228,29 @@ static size_t hash64(uint64_t k, size_t mask)
 }
 
 /* Bit i set where the sample i of a tile row (WM_TILE + 1 values) is water
- * (<= 0), the rule cell() applies. */
+ * (<= 0), the rule cell() applies. The compares vectorize into bytes; eight
+ * 0/1 bytes are gathered into eight bits by one multiplication (the
+ * products' partial sums never carry). */
 static uint64_t water_bits(const float *row)
 {
-    uint64_t m = 0;
+    enum
+    {
+        NB = (WM_TILE + 1 + 7) / 8 * 8
+    };
+    unsigned char b[NB];
     for (int32_t i = 0; i <= WM_TILE; i++)
-        m |= (uint64_t)(row[i] <= 0) << i;
+        b[i] = row[i] <= 0;
+    for (int32_t i = WM_TILE + 1; i < NB; i++)
+        b[i] = 0;
+    uint64_t m = 0;
+    for (int32_t k = 0; k < NB / 8; k++)
+    {
+        uint64_t x = 0;
+        for (int j = 0; j < 8; j++)
+            x |= (uint64_t)b[8 * k + j] << (8 * j);
+        /* byte j (0/1) of x moves to bit 56 + j */
+        m |= ((x * UINT64_C(0x0102040810204080)) >> 56) << (8 * k);
+    }
     return m;
 }
 

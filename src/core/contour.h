@@ -28,6 +28,14 @@ extern "C"
     wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                                  const wm_ctx *ctx);
 
+    /**
+     * The ring edge wm_contour_extract makes in cell (c, r) of the field
+     * (0 <= c, r < n) when the cell holds exactly one: *a to *b, in ring
+     * order. Returns 0 for a cell with no crossing or two (a saddle).
+     */
+    int wm_contour_cell_edge(const wm_field *f, int32_t c, int32_t r, wm_pt *a,
+                             wm_pt *b);
+
 #ifdef __cplusplus
 }
 #endif

@@ -39,6 +39,7 @@
  */
 #include "crease.h"
 
+#include "contour.h"
 #include "field.h"
 
 #include "lattice.h"
@@ -412,51 +413,119 @@ static int32_t cell_of(const ringgrid *g, int32_t v)
 
 /* Registers the edges of g->r (in the cells of g->active, or all), in a
  * grid whose ring_of is filled; (re)allocates start and edges. */
+/* Whether a cell of [x0, x1] x [y0, y1] (lattice box) is registered. */
+static int box_active(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
+                      int32_t y1)
+{
+    if (!g->active)
+        return 1;
+    const int32_t cx0 = cell_of(g, x0), cx1 = cell_of(g, x1);
+    const int32_t cy0 = cell_of(g, y0), cy1 = cell_of(g, y1);
+    for (int32_t cy = cy0; cy <= cy1; cy++)
+        for (int32_t cx = cx0; cx <= cx1; cx++)
+            if (g->active[(size_t)cy * (size_t)g->side + (size_t)cx])
+                return 1;
+    return 0;
+}
+
+/* Cells cb = {x0, y0, x1, y1} of the box of edge a-b. */
+static void edge_cells(const ringgrid *g, wm_pt a, wm_pt b, int32_t *cb)
+{
+    cb[0] = cell_of(g, a.x < b.x ? a.x : b.x);
+    cb[1] = cell_of(g, a.y < b.y ? a.y : b.y);
+    cb[2] = cell_of(g, a.x > b.x ? a.x : b.x);
+    cb[3] = cell_of(g, a.y > b.y ? a.y : b.y);
+}
+
+/* Edges are looked at in runs of CHUNK along a ring: a run whose box has
+ * no registered cell is passed over whole. */
+#define CHUNK 64
+
 static wm_status fill_ringgrid(ringgrid *g)
 {
     const wm_rings *r = g->r;
     const size_t ncell = (size_t)g->side * (size_t)g->side;
+    size_t *cur = NULL;
+    uint32_t *sel = NULL; /* the edges registered in some cell */
+    size_t nsel = 0;
     free(g->start);
     free(g->edges);
     g->edges = NULL;
     g->start = calloc(ncell + 1, sizeof *g->start);
-    if (!g->start)
-        return WM_ERR_NOMEM;
-    size_t *cur = NULL;
+    sel = malloc((r->npts + 1) * sizeof *sel);
+    if (!g->start || !sel)
+        goto nomem;
     for (int pass = 0; pass < 2; pass++)
     {
-        for (size_t k = 0; k < r->npts; k++)
+        /* pass 0 counts (rings walked directly, in runs), pass 1 fills */
+        for (size_t ri = 0; pass == 0 && ri < r->nrings; ri++)
         {
-            const wm_pt a = r->pts[k], b = r->pts[succ(r, g->ring_of, k)];
-            const int32_t x0 = cell_of(g, a.x < b.x ? a.x : b.x);
-            const int32_t x1 = cell_of(g, a.x > b.x ? a.x : b.x);
-            const int32_t y0 = cell_of(g, a.y < b.y ? a.y : b.y);
-            const int32_t y1 = cell_of(g, a.y > b.y ? a.y : b.y);
-            for (int32_t cy = y0; cy <= y1; cy++)
-                for (int32_t cx = x0; cx <= x1; cx++)
+            const size_t b0 = r->start[ri], e = r->start[ri + 1];
+            for (size_t k0 = b0; k0 < e; k0 += CHUNK)
+            {
+                const size_t k1 = k0 + CHUNK < e ? k0 + CHUNK : e;
+                int32_t x0 = INT32_MAX, y0 = INT32_MAX, x1 = INT32_MIN,
+                        y1 = INT32_MIN;
+                for (size_t k = k0; k <= k1; k++)
                 {
-                    const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
-                    if (g->active && !g->active[c])
-                        continue;
-                    if (pass == 0)
-                        g->start[c + 1]++;
-                    else
-                        g->edges[cur[c]++] = (uint32_t)k;
+                    const wm_pt p = r->pts[k < e ? k : b0];
+                    x0 = p.x < x0 ? p.x : x0;
+                    x1 = p.x > x1 ? p.x : x1;
+                    y0 = p.y < y0 ? p.y : y0;
+                    y1 = p.y > y1 ? p.y : y1;
                 }
+                if (!box_active(g, x0, y0, x1, y1))
+                    continue;
+                for (size_t k = k0; k < k1; k++)
+                {
+                    int32_t cb[4];
+                    edge_cells(g, r->pts[k], r->pts[k + 1 < e ? k + 1 : b0],
+                               cb);
+                    int any = 0;
+                    for (int32_t cy = cb[1]; cy <= cb[3]; cy++)
+                        for (int32_t cx = cb[0]; cx <= cb[2]; cx++)
+                        {
+                            const size_t c =
+                                (size_t)cy * (size_t)g->side + (size_t)cx;
+                            if (g->active && !g->active[c])
+                                continue;
+                            any = 1;
+                            g->start[c + 1]++;
+                        }
+                    if (any)
+                        sel[nsel++] = (uint32_t)k;
+                }
+            }
         }
         if (pass == 0)
         {
             cur = wm_csr_begin(g->start, ncell);
             g->edges = malloc((g->start[ncell] + 1) * sizeof *g->edges);
             if (!g->edges || !cur)
-            {
-                free(cur);
-                return WM_ERR_NOMEM;
-            }
+                goto nomem;
+            continue;
+        }
+        for (size_t i = 0; i < nsel; i++)
+        {
+            const size_t k = sel[i];
+            int32_t cb[4];
+            edge_cells(g, r->pts[k], r->pts[succ(r, g->ring_of, k)], cb);
+            for (int32_t cy = cb[1]; cy <= cb[3]; cy++)
+                for (int32_t cx = cb[0]; cx <= cb[2]; cx++)
+                {
+                    const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
+                    if (!g->active || g->active[c])
+                        g->edges[cur[c]++] = (uint32_t)k;
+                }
         }
     }
     free(cur);
+    free(sel);
     return WM_OK;
+nomem:
+    free(cur);
+    free(sel);
+    return WM_ERR_NOMEM;
 }
 
 /* The grid of rings r over a block of side S: every edge registered, or
@@ -523,16 +592,22 @@ typedef struct
     size_t edge;
 } nearest;
 
+/* Distance from (x, y) to the ring edge a -> b. */
+static double edge_dist(wm_pt a, wm_pt b, double x, double y)
+{
+    const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((x - a.x) * dx + (y - a.y) * dy) / l2 : 0;
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    const double ex = x - (a.x + t * dx), ey = y - (a.y + t * dy);
+    return sqrt(ex * ex + ey * ey);
+}
+
 static int nearest_fn(void *arg, size_t k)
 {
     nearest *n = arg;
     const wm_rings *r = n->g->r;
-    const wm_pt a = r->pts[k], b = r->pts[succ(r, n->g->ring_of, k)];
-    const double dx = b.x - a.x, dy = b.y - a.y, l2 = dx * dx + dy * dy;
-    double t = l2 > 0 ? ((n->x - a.x) * dx + (n->y - a.y) * dy) / l2 : 0;
-    t = t < 0 ? 0 : (t > 1 ? 1 : t);
-    const double ex = n->x - (a.x + t * dx), ey = n->y - (a.y + t * dy);
-    const double d = sqrt(ex * ex + ey * ey);
+    const double d =
+        edge_dist(r->pts[k], r->pts[succ(r, n->g->ring_of, k)], n->x, n->y);
     if (d < n->best || (d == n->best && k < n->edge))
     {
         n->best = d;
@@ -674,30 +749,44 @@ static int near_hot(const uint64_t *hot, size_t nhot, wm_pt p)
     return 0;
 }
 
-/* The ring grid cells a pass after the first needs (owned by the caller):
- * its candidates are in the 3 x 3 hot cells around a corner of `hot`, their
- * searches reach WM_CREASE_REACH around them, and the edges they may split
- * a little farther; two cells of margin cover that (a query beyond them
- * completes the grid). NULL when out of memory. */
-static uint8_t *hot_cells(const uint64_t *hot, size_t nhot, int32_t S)
+/* Marks the ring grid cells [x0, x1] x [y0, y1] (clamped) in a. */
+static void mark_cells(uint8_t *a, int32_t side, int32_t x0, int32_t y0,
+                       int32_t x1, int32_t y1)
+{
+    x0 = x0 < 0 ? 0 : x0;
+    y0 = y0 < 0 ? 0 : y0;
+    x1 = x1 >= side ? side - 1 : x1;
+    y1 = y1 >= side ? side - 1 : y1;
+    for (int32_t cy = y0; cy <= y1; cy++)
+        if (x0 <= x1)
+            memset(a + (size_t)cy * (size_t)side + (size_t)x0, 1,
+                   (size_t)(x1 - x0 + 1));
+}
+
+/* The ring grid cells a pass needs (owned by the caller). The first pass
+ * tries `cand`; a later one the candidates in the 3 x 3 hot cells around a
+ * corner of `hot`. Searches reach WM_CREASE_REACH (one cell) around a
+ * candidate and the edges it may split a little farther: two cells of
+ * margin cover that (a query beyond them completes the grid). NULL when out
+ * of memory. */
+static uint8_t *pass_cells(const wm_pt *cand, size_t ncand, const uint64_t *hot,
+                           size_t nhot, int32_t S)
 {
     const int32_t side = S / RCELL + 1, per = HOT_CELL / RCELL;
     uint8_t *a = calloc((size_t)side * (size_t)side, 1);
     if (!a)
         return NULL;
+    for (size_t i = 0; !hot && i < ncand; i++)
+    {
+        const int32_t cx = cand[i].x / RCELL, cy = cand[i].y / RCELL;
+        mark_cells(a, side, cx - 2, cy - 2, cx + 2, cy + 2);
+    }
     for (size_t i = 0; i < nhot; i++)
     {
         const int32_t hx = (int32_t)(uint32_t)(hot[i] & 0xffffffffu);
         const int32_t hy = (int32_t)(uint32_t)(hot[i] >> 32);
-        int32_t x0 = (hx - 1) * per - 2, x1 = (hx + 2) * per + 1;
-        int32_t y0 = (hy - 1) * per - 2, y1 = (hy + 2) * per + 1;
-        x0 = x0 < 0 ? 0 : x0;
-        y0 = y0 < 0 ? 0 : y0;
-        x1 = x1 >= side ? side - 1 : x1;
-        y1 = y1 >= side ? side - 1 : y1;
-        for (int32_t cy = y0; cy <= y1; cy++)
-            memset(a + (size_t)cy * (size_t)side + (size_t)x0, 1,
-                   (size_t)(x1 - x0 + 1));
+        mark_cells(a, side, (hx - 1) * per - 2, (hy - 1) * per - 2,
+                   (hx + 2) * per + 1, (hy + 2) * per + 1);
     }
     return a;
 }
@@ -720,8 +809,8 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
     ringgrid g;
     memset(&g, 0, sizeof g);
     *ninserted = 0;
-    uint8_t *active = hot ? hot_cells(hot, nhot, S) : NULL;
-    if (hot && !active)
+    uint8_t *active = pass_cells(cand, ncand, hot, nhot, S);
+    if (!active)
         goto nomem;
     st = build_ringgrid(&g, rings, S, active);
     if (st != WM_OK)
@@ -731,8 +820,6 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
         goto nomem;
     for (size_t i = 0; i < ncand; i++)
     {
-        if (i > 0 && wm_pt_eq(cand[i], cand[i - 1]))
-            continue;
         const wm_pt c = cand[i];
         if (hot && !near_hot(hot, nhot, c))
             continue;
@@ -829,7 +916,7 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     size_t npr = 0, prcap = 0;
     size_t *pcs = NULL, *pcur = NULL; /* primitives by cell (CSR) */
     uint32_t *pcr = NULL;
-    wm_pt *cand = NULL;
+    wm_pt *cand = NULL, *try0 = NULL;
     size_t ncand = 0, candcap = 0;
 
     if (s->nbx == 0 || rings->nrings == 0 || bx < s->bx0 || by < s->by0 ||
@@ -979,6 +1066,26 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     if (ncand == 0)
         goto cleanup;
     qsort(cand, ncand, sizeof *cand, cmp_pt);
+    /* distinct candidates; those the first pass tries: not within a
+     * quarter pixel of the contour edge of their own cell (the first pass
+     * would find that edge or a nearer one and skip them) */
+    size_t nu = 0, ntry = 0;
+    for (size_t i = 0; i < ncand; i++)
+        if (nu == 0 || !wm_pt_eq(cand[i], cand[nu - 1]))
+            cand[nu++] = cand[i];
+    ncand = nu;
+    try0 = malloc(ncand * sizeof *try0);
+    if (!try0)
+        goto nomem;
+    for (size_t i = 0; i < ncand; i++)
+    {
+        const wm_pt c = cand[i];
+        wm_pt a, b;
+        if (wm_contour_cell_edge(f, c.x / WM_Q, c.y / WM_Q, &a, &b) &&
+            edge_dist(a, b, c.x, c.y) <= WM_Q / 4.0)
+            continue;
+        try0[ntry++] = c;
+    }
 
     /* 3-4. insertion passes: a corner next to one just inserted waits for
      * the next pass, which sees the new edges */
@@ -988,8 +1095,8 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     {
         size_t n = 0;
         uint64_t *next = NULL;
-        st = insert_pass(&in, rings, cand, ncand, pass ? hot : NULL, nhot,
-                         &next, &n);
+        st = insert_pass(&in, rings, pass ? cand : try0, pass ? ncand : ntry,
+                         pass ? hot : NULL, nhot, &next, &n);
         free(hot);
         hot = next;
         nhot = n;
@@ -1013,6 +1120,7 @@ cleanup:
     free(pcs);
     free(pcur);
     free(pcr);
+    free(try0);
     free(cand);
     return st;
 }
