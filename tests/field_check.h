@@ -58,11 +58,14 @@ static inline void fc_make_field(wm_field *f, int32_t w, int32_t h,
     const size_t nt = (size_t)f->ntx * (size_t)f->nty;
     f->kind = calloc(nt, 1);
     f->val = calloc(nt, sizeof *f->val);
+    f->slab = malloc(sizeof *f->slab);
+    f->slab[0] = calloc(nt * (WM_TILE + 1) * (WM_TILE + 1), sizeof(float));
+    f->nslab = 1;
     for (int32_t ty = 0; ty < f->nty; ty++)
         for (int32_t tx = 0; tx < f->ntx; tx++)
         {
             const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
-            float *o = calloc((WM_TILE + 1) * (WM_TILE + 1), sizeof *o);
+            float *o = f->slab[0] + t * (WM_TILE + 1) * (WM_TILE + 1);
             for (int32_t j = 0; j <= WM_TILE; j++)
                 for (int32_t i = 0; i <= WM_TILE; i++)
                 {

@@ -53,13 +53,24 @@ typedef struct
 {
     uint64_t in_edge, out_edge; /* global cell-edge ids */
     wm_pt in_pt, out_pt;
+    int32_t c, r;         /* its cell */
+    uint8_t iside, oside; /* cell sides of in_edge and out_edge (EB..EL) */
 } seg;
+
+/* The segments of one tile: segs[s0, s1) in cells [c0, c1) x [r0, r1). */
+typedef struct
+{
+    size_t s0, s1;
+    int32_t c0, r0, c1, r1;
+} tilesegs;
 
 typedef struct
 {
     int32_t n; /* cells per side */
     seg *segs;
     size_t nsegs, cap;
+    tilesegs *tiles;
+    size_t ntiles, tcap;
 } state;
 
 /* Edge id: horizontal edge from sample (c,r) to (c+1,r) = 2*(r*(n+1)+c),
@@ -86,7 +97,8 @@ static wm_pt crossing(float va, float vb, int32_t x, int32_t y, int vertical)
     return p;
 }
 
-static int push_seg(state *s, uint64_t ie, uint64_t oe, wm_pt ip, wm_pt op)
+static int push_seg(state *s, uint64_t ie, uint64_t oe, wm_pt ip, wm_pt op,
+                    int32_t c, int32_t r, int iside, int oside)
 {
     if (s->nsegs == s->cap)
     {
@@ -102,6 +114,10 @@ static int push_seg(state *s, uint64_t ie, uint64_t oe, wm_pt ip, wm_pt op)
     g->out_edge = oe;
     g->in_pt = ip;
     g->out_pt = op;
+    g->c = c;
+    g->r = r;
+    g->iside = (uint8_t)iside;
+    g->oside = (uint8_t)oside;
     return 1;
 }
 
@@ -157,7 +173,7 @@ static int cell(state *s, int32_t c, int32_t r, const float *p)
             while (kind[m] != 2)
                 m = (m + 3) & 3;
         }
-        if (!push_seg(s, id[k], id[m], pt[k], pt[m]))
+        if (!push_seg(s, id[k], id[m], pt[k], pt[m], c, r, k, m))
             return 0;
     }
     return 1;
@@ -254,12 +270,73 @@ static uint64_t water_bits(const float *row)
     return m;
 }
 
+/* The cell across side `side` of cell (c, r). */
+static const int32_t side_dc[4] = {0, 1, 0, -1}, side_dr[4] = {-1, 0, 1, 0};
+
+/* Whether segment i's in edge (in == 1) or out edge (in == 0) lies on a
+ * side of its tile, the cell across it in another tile or off the block. */
+static int crosses_tile(const state *s, size_t i, int in)
+{
+    const seg *g = &s->segs[i];
+    const int side = in ? g->iside : g->oside;
+    const int32_t c = g->c + side_dc[side], r = g->r + side_dr[side];
+    /* tiles are WM_TILE-aligned: same tile when the same tile index */
+    return c < 0 || r < 0 || c / WM_TILE != g->c / WM_TILE ||
+           r / WM_TILE != g->r / WM_TILE;
+}
+
+/* Links the segments whose out edge is inside their tile (next[],
+ * haspred[]; next[i] = SIZE_MAX elsewhere) and lists in bnd the segments
+ * with an edge on a tile side. Returns how many. */
+static size_t link_tiles(const state *s, size_t *next, uint8_t *haspred,
+                         size_t *bnd)
+{
+    uint32_t first[WM_TILE * WM_TILE]; /* 1 + offset of the cell's first */
+    size_t nbnd = 0;
+    memset(first, 0, sizeof first);
+    for (size_t t = 0; t < s->ntiles; t++)
+    {
+        const tilesegs *ts = &s->tiles[t];
+        /* a cell's segments are consecutive: the first one is enough */
+        for (size_t i = ts->s1; i-- > ts->s0;)
+            first[(s->segs[i].r - ts->r0) * WM_TILE + (s->segs[i].c - ts->c0)] =
+                (uint32_t)(i - ts->s0 + 1);
+        for (size_t i = ts->s0; i < ts->s1; i++)
+        {
+            const seg *g = &s->segs[i];
+            next[i] = SIZE_MAX;
+            if (crosses_tile(s, i, 1) || crosses_tile(s, i, 0))
+                bnd[nbnd++] = i;
+            if (crosses_tile(s, i, 0))
+                continue;
+            const int32_t c = g->c + side_dc[g->oside];
+            const int32_t r = g->r + side_dr[g->oside];
+            const uint32_t f0 = first[(r - ts->r0) * WM_TILE + (c - ts->c0)];
+            for (size_t j = ts->s0 + f0 - 1; f0 && j < ts->s1; j++)
+            {
+                if (s->segs[j].c != c || s->segs[j].r != r)
+                    break;
+                if (s->segs[j].in_edge == g->out_edge)
+                {
+                    next[i] = j;
+                    haspred[j] = 1;
+                    break;
+                }
+            }
+        }
+        for (size_t i = ts->s0; i < ts->s1; i++)
+            first[(s->segs[i].r - ts->r0) * WM_TILE + (s->segs[i].c - ts->c0)] =
+                0;
+    }
+    return nbnd;
+}
+
 wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                              const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
-    state s = {f->w - 1, NULL, 0, 0};
-    size_t *slot = NULL, *next = NULL;
+    state s = {f->w - 1, NULL, 0, 0, NULL, 0, 0};
+    size_t *slot = NULL, *next = NULL, *bnd = NULL;
     uint8_t *used = NULL, *haspred = NULL;
     entry *ent = NULL;
     size_t nent = 0;
@@ -279,6 +356,10 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
             const int32_t r1 = r0 + WM_TILE < n ? r0 + WM_TILE : n;
             /* water bits of the tile's sample rows; a cell needs work only
              * where its four corner bits differ */
+            if (!wm_grow((void **)&s.tiles, &s.tcap, s.ntiles + 1,
+                         sizeof *s.tiles))
+                goto nomem;
+            const size_t s0 = s.nsegs;
             uint64_t below = water_bits(f->val[t]);
             for (int32_t r = r0; r < r1; r++)
             {
@@ -296,31 +377,44 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                 }
                 below = above;
             }
+            const tilesegs ts = {s0, s.nsegs, c0, r0, c1, r1};
+            s.tiles[s.ntiles++] = ts;
         }
 
-    /* hash: in_edge -> segment; next[] links chains */
-    size_t hcap = 16;
-    while (hcap < 2 * s.nsegs + 2)
-        hcap *= 2;
-    slot = malloc(hcap * sizeof *slot);
     next = malloc((s.nsegs + 1) * sizeof *next);
     used = calloc(s.nsegs + 1, 1);
     haspred = calloc(s.nsegs + 1, 1);
     ent = malloc((s.nsegs + 1) * sizeof *ent);
-    if (!slot || !next || !used || !haspred || !ent)
+    bnd = malloc((s.nsegs + 1) * sizeof *bnd);
+    if (!next || !used || !haspred || !ent || !bnd)
+        goto nomem;
+    /* next[] links chains: inside a tile through a map from cell to its
+     * first segment, across tiles through a hash of the segments entering
+     * over a tile side */
+    size_t nbnd = link_tiles(&s, next, haspred, bnd);
+    size_t hcap = 16;
+    while (hcap < 2 * nbnd + 2)
+        hcap *= 2;
+    slot = malloc(hcap * sizeof *slot);
+    if (!slot)
         goto nomem;
     for (size_t i = 0; i < hcap; i++)
         slot[i] = SIZE_MAX;
-    for (size_t i = 0; i < s.nsegs; i++)
+    for (size_t b = 0; b < nbnd; b++)
     {
+        const size_t i = bnd[b];
+        if (!crosses_tile(&s, i, 1))
+            continue;
         size_t h = hash64(s.segs[i].in_edge, hcap - 1);
         while (slot[h] != SIZE_MAX)
             h = (h + 1) & (hcap - 1);
         slot[h] = i;
     }
-    for (size_t i = 0; i < s.nsegs; i++)
+    for (size_t b = 0; b < nbnd; b++)
     {
-        next[i] = SIZE_MAX;
+        const size_t i = bnd[b];
+        if (!crosses_tile(&s, i, 0))
+            continue;
         size_t h = hash64(s.segs[i].out_edge, hcap - 1);
         while (slot[h] != SIZE_MAX)
         {
@@ -426,6 +520,8 @@ nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory extracting contours");
 cleanup:
     free(s.segs);
+    free(s.tiles);
+    free(bnd);
     free(slot);
     free(next);
     free(used);

@@ -627,7 +627,6 @@ typedef struct
     size_t *seg_start, *grp_start, *edge_start;
     uint32_t *seg, *edge;
     uint64_t *mask;
-    float *val;
     size_t cap_seg, cap_edge, cap_mask, cap_grp;
 } batch_buf;
 
@@ -640,7 +639,6 @@ static void batch_buf_free(batch_buf *bb)
     free(bb->seg);
     free(bb->edge);
     free(bb->mask);
-    free(bb->val);
 }
 
 /* Fills the batch of window tiles tiles[0 .. n-1]. */
@@ -703,13 +701,14 @@ static wm_status build_batch(const work *w, const size_t *tiles, size_t n,
     b->edge_start = bb->edge_start;
     b->edge = bb->edge;
     b->mask = bb->mask;
-    b->val = bb->val;
+    b->val = NULL; /* the caller's */
     return WM_OK;
 }
 
-/* Stores the evaluated tile k of a batch as window tile t: uniform when
- * every sample inside the window is +band or -band, values otherwise. */
-static wm_status store_tile(work *w, size_t t, const float *val)
+/* Keeps the evaluated tile k of a batch as window tile t: uniform when
+ * every sample inside the window is +band or -band, else its values, moved
+ * to *dst (the next free tile of the slab; advanced). */
+static void store_tile(work *w, size_t t, float *val, float **dst)
 {
     wm_field *f = w->f;
     const float band = (float)w->s->band;
@@ -732,17 +731,18 @@ static wm_status store_tile(work *w, size_t t, const float *val)
     if (all_land || all_water)
     {
         f->kind[t] = (uint8_t)(all_water ? WM_TILE_WATER : WM_TILE_LAND);
-        return WM_OK;
+        return;
     }
-    float *out = malloc(sizeof(float) * TS1 * TS1);
-    if (!out)
-        return WM_ERR_NOMEM;
-    memcpy(out, val, sizeof(float) * TS1 * TS1);
-    f->val[t] = out;
+    if (*dst != val)
+        memmove(*dst, val, sizeof(float) * TS1 * TS1);
+    f->val[t] = *dst;
+    *dst += TS1 * TS1;
     f->kind[t] = WM_TILE_MIXED;
     f->mixed++;
-    return WM_OK;
 }
+
+/* Tiles per slab of values (at least a batch): about 1 MB. */
+#define SLAB_TILES 256
 
 wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
                            int32_t w, int32_t h, const wm_field_device *dev,
@@ -819,22 +819,38 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
     bb.org = malloc((2 * nb + 1) * sizeof *bb.org);
     bb.seg_start = malloc((nb + 1) * sizeof *bb.seg_start);
     bb.grp_start = malloc((nb + 1) * sizeof *bb.grp_start);
-    bb.val = malloc((nb * TS1 * TS1 + 1) * sizeof *bb.val);
-    if (!bb.org || !bb.seg_start || !bb.grp_start || !bb.val)
+    if (!bb.org || !bb.seg_start || !bb.grp_start)
         goto nomem;
+    /* batches are evaluated straight into the slabs, mixed tiles then
+     * packed down over the uniform ones */
+    float *top = NULL;
+    size_t room = 0, slabcap = 0; /* tiles left in the current slab */
     for (size_t c0 = 0; c0 < ncand; c0 += batch)
     {
         const size_t n = ncand - c0 < batch ? ncand - c0 : batch;
         wm_field_batch b;
+        if (n > room)
+        {
+            const size_t cap = SLAB_TILES > batch ? SLAB_TILES : batch;
+            if (!wm_grow((void **)&f->slab, &slabcap, f->nslab + 1,
+                         sizeof *f->slab) ||
+                !(top = malloc(cap * TS1 * TS1 * sizeof *top)))
+                goto nomem;
+            f->slab[f->nslab++] = top;
+            room = cap;
+        }
         if (build_batch(&wk, cand + c0, n, &bb, &b) != WM_OK)
             goto nomem;
+        b.val = top;
         st = dev ? dev->eval(dev->user, &b, ctx)
                  : wm_field_eval_c(NULL, &b, ctx);
         if (st != WM_OK)
             goto failed;
+        float *next = top;
         for (size_t k = 0; k < n; k++)
-            if (store_tile(&wk, cand[c0 + k], bb.val + k * TS1 * TS1) != WM_OK)
-                goto nomem;
+            store_tile(&wk, cand[c0 + k], top + k * TS1 * TS1, &next);
+        room -= (size_t)(next - top) / (TS1 * TS1);
+        top = next;
     }
     goto cleanup;
 nomem:
@@ -887,12 +903,9 @@ void wm_field_free(wm_field *f)
 {
     if (!f)
         return;
-    if (f->val)
-    {
-        const size_t nt = (size_t)f->ntx * (size_t)f->nty;
-        for (size_t t = 0; t < nt; t++)
-            free(f->val[t]);
-    }
+    for (size_t i = 0; i < f->nslab; i++)
+        free(f->slab[i]);
+    free(f->slab);
     free(f->val);
     free(f->kind);
     memset(f, 0, sizeof *f);

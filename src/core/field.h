@@ -38,7 +38,10 @@ extern "C"
         float band;       /**< clamp, pixels */
         uint8_t *kind;    /**< ntx*nty wm_tile_kind (owned) */
         float **val;      /**< ntx*nty pointers, (WM_TILE+1)^2 row-major values
-                               for MIXED tiles, NULL otherwise (owned) */
+                               for MIXED tiles, NULL otherwise (owned; the
+                               values live in `slab`) */
+        float **slab;     /**< nslab blocks holding the tiles' values (owned) */
+        size_t nslab;
         size_t mixed;     /**< number of MIXED tiles */
         uint64_t samples; /**< samples evaluated (statistics) */
         uint64_t pairs;   /**< sample-segment pairs evaluated (statistics) */

@@ -68,7 +68,7 @@ int wm_grow(void **buf, size_t *cap, size_t need, size_t elem)
     return 1;
 }
 
-wm_status wm_rings_push(wm_rings *r, wm_pt p)
+wm_status wm_rings_push_grow(wm_rings *r, wm_pt p)
 {
     if (!wm_grow((void **)&r->pts, &r->pts_cap, r->npts + 1, sizeof *r->pts))
         return WM_ERR_NOMEM;

@@ -168,15 +168,22 @@ static uint32_t s_far(const simp *sp, uint32_t a, uint32_t b)
     const int64_t len2 = dx * dx + dy * dy;
     uint32_t best = S_NONE;
     wm_i128 bestd = -1;
-    for (uint32_t i = s_nxt(sp, a); i != b; i = s_nxt(sp, i))
-    {
-        const wm_i128 d = s_dnum(pa, pb, sp->P[i], len2);
-        if (d > bestd)
+    /* the span in ring order as one or two index ranges */
+    const size_t r = sp->ring_of[a];
+    const uint32_t rs = (uint32_t)sp->in->start[r];
+    const uint32_t re = (uint32_t)sp->in->start[r + 1];
+    const uint32_t lo[2] = {a + 1, rs},
+                   hi[2] = {a < b ? b : re, a < b ? rs : b};
+    for (int k = 0; k < 2; k++)
+        for (uint32_t i = lo[k]; i < hi[k]; i++)
         {
-            bestd = d;
-            best = i;
+            const wm_i128 d = s_dnum(pa, pb, sp->P[i], len2);
+            if (d > bestd)
+            {
+                bestd = d;
+                best = i;
+            }
         }
-    }
     return best;
 }
 

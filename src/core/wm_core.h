@@ -83,8 +83,18 @@ extern "C"
     void wm_rings_clear(wm_rings *r);
     /** Frees the memory; r may be NULL. The struct itself is the caller's. */
     void wm_rings_free(wm_rings *r);
+    /** wm_rings_push when the points' array is full: grows it, appends. */
+    wm_status wm_rings_push_grow(wm_rings *r, wm_pt p);
     /** Appends a point to the ring being built. */
-    wm_status wm_rings_push(wm_rings *r, wm_pt p);
+    static inline wm_status wm_rings_push(wm_rings *r, wm_pt p)
+    {
+        if (r->npts < r->pts_cap)
+        {
+            r->pts[r->npts++] = p;
+            return WM_OK;
+        }
+        return wm_rings_push_grow(r, p);
+    }
     /** Closes the ring being built (the points pushed since the last close). */
     wm_status wm_rings_close(wm_rings *r);
     /**
