@@ -57,11 +57,11 @@ typedef struct
     uint8_t iside, oside; /* cell sides of in_edge and out_edge (EB..EL) */
 } seg;
 
-/* The segments of one tile: segs[s0, s1) in cells [c0, c1) x [r0, r1). */
+/* The segments of one tile: segs[s0, s1), its first cell (c0, r0). */
 typedef struct
 {
     size_t s0, s1;
-    int32_t c0, r0, c1, r1;
+    int32_t c0, r0;
 } tilesegs;
 
 typedef struct
@@ -305,9 +305,10 @@ static size_t link_tiles(const state *s, size_t *next, uint8_t *haspred,
         {
             const seg *g = &s->segs[i];
             next[i] = SIZE_MAX;
-            if (crosses_tile(s, i, 1) || crosses_tile(s, i, 0))
+            const int out_crosses = crosses_tile(s, i, 0);
+            if (out_crosses || crosses_tile(s, i, 1))
                 bnd[nbnd++] = i;
-            if (crosses_tile(s, i, 0))
+            if (out_crosses)
                 continue;
             const int32_t c = g->c + side_dc[g->oside];
             const int32_t r = g->r + side_dr[g->oside];
@@ -377,7 +378,7 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                 }
                 below = above;
             }
-            const tilesegs ts = {s0, s.nsegs, c0, r0, c1, r1};
+            const tilesegs ts = {s0, s.nsegs, c0, r0};
             s.tiles[s.ntiles++] = ts;
         }
 

@@ -383,7 +383,6 @@ static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
 typedef struct
 {
     const wm_rings *r;
-    int32_t S;       /* block side, lattice units */
     int32_t side;    /* cells per side */
     size_t *start;   /* side*side + 1 */
     uint32_t *edges; /* edge k = from vertex k to its successor */
@@ -534,7 +533,6 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S,
                                 uint8_t *active)
 {
     g->r = r;
-    g->S = S;
     g->side = S / RCELL + 1;
     g->active = active;
     g->ring_of = malloc((r->npts + 1) * sizeof *g->ring_of);
