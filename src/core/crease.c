@@ -63,7 +63,8 @@ static uint64_t ckey(int64_t cx, int64_t cy)
 typedef struct
 {
     wm_pt p;
-    size_t ring, seg; /* insert after vertex seg of ring */
+    size_t seg; /* insert after vertex seg (rings are contiguous: the
+                   order of seg is the order along the rings) */
 } insertion;
 
 static int cmp_pt(const void *a, const void *b)
@@ -77,8 +78,6 @@ static int cmp_pt(const void *a, const void *b)
 static int cmp_ins(const void *a, const void *b)
 {
     const insertion *x = a, *y = b;
-    if (x->ring != y->ring)
-        return x->ring < y->ring ? -1 : 1;
     return (x->seg > y->seg) - (x->seg < y->seg);
 }
 
@@ -858,7 +857,7 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
         if (ka == SIZE_MAX)
             continue;
         const size_t kb = succ(rings, g.ring_of, ka);
-        const insertion x = {c, g.ring_of[ka], ka};
+        const insertion x = {c, ka};
         if (!push((void **)&ins, &nins, &inscap, &x, sizeof x))
             goto nomem;
         split[ka] = 1;
