@@ -2,6 +2,66 @@
 #include "lattice.h"
 #include "tap.h"
 
+#include <string.h>
+
+/* wm_cells against a dense reference: n random (cell, item) pairs (items
+ * in order of addition) in a side x side grid; every row run of a few
+ * random column ranges must list exactly the dense cells' items, in order.
+ * Returns the number of mismatching runs. */
+static int cells_mismatches(wm_cells *g, int32_t side, size_t n, unsigned seed)
+{
+    uint32_t *cx = malloc((n + 1) * sizeof *cx);
+    uint32_t *cy = malloc((n + 1) * sizeof *cy);
+    uint32_t *ref = malloc((n + 1) * sizeof *ref);
+    int bad = 0;
+    wm_cells_reset(g, side);
+    for (size_t i = 0; i < n; i++)
+    {
+        seed = seed * 1103515245u + 12345u;
+        /* clustered: half the pairs in a small corner, as rings are */
+        const uint32_t lim = (i & 1) ? (uint32_t)side : 3;
+        cx[i] = (seed >> 8) % lim;
+        seed = seed * 1103515245u + 12345u;
+        cy[i] = (seed >> 8) % lim;
+        if (!wm_cells_add(g, (int32_t)cx[i], (int32_t)cy[i], (uint32_t)i))
+            bad++;
+    }
+    if (wm_cells_index(g) != WM_OK)
+        bad++;
+    for (int32_t y = 0; y < side && !bad; y++)
+        for (int t = 0; t < 4; t++)
+        {
+            seed = seed * 1103515245u + 12345u;
+            const int32_t x0 = (int32_t)((seed >> 8) % (uint32_t)side);
+            const int32_t x1 = t == 0 ? side - 1 : x0 + (int32_t)(t * t);
+            const int32_t x1c = x1 < side ? x1 : side - 1;
+            size_t b, e, k = 0;
+            wm_cells_row(g, y, x0, x1c, &b, &e);
+            /* the reference run: the pairs of row y and columns x0..x1c,
+             * by column, then in order of addition (insertion sort) */
+            for (size_t i = 0; i < n; i++)
+                if (cy[i] == (uint32_t)y && cx[i] >= (uint32_t)x0 &&
+                    cx[i] <= (uint32_t)x1c)
+                {
+                    size_t j = k++;
+                    for (; j > 0 && cx[ref[j - 1]] > cx[i]; j--)
+                        ref[j] = ref[j - 1];
+                    ref[j] = (uint32_t)i;
+                }
+            for (size_t j = 0; j < k; j++)
+                if (b + j >= e || g->item[b + j] != ref[j])
+                    bad++;
+            if (b + k != e)
+                bad++;
+            if (bad)
+                break;
+        }
+    free(ref);
+    free(cx);
+    free(cy);
+    return bad;
+}
+
 int main(void)
 {
     const wm_pt a = {0, 0}, b = {10, 0}, c = {5, 5}, d = {5, -5};
@@ -61,5 +121,18 @@ int main(void)
     TAP_EQ(wm_rings_len(&r, 1), 3, "ring 1 has 3 points");
     wm_rings_free(&r);
     wm_rings_free(NULL);
+
+    wm_cells g;
+    memset(&g, 0, sizeof g);
+    TAP_EQ(cells_mismatches(&g, 1, 5, 1), 0, "cells: 1 x 1 grid");
+    TAP_EQ(cells_mismatches(&g, 40, 600, 2), 0,
+           "cells: 40 x 40 grid (one radix pass), reused");
+    TAP_EQ(cells_mismatches(&g, 300, 900, 3), 0,
+           "cells: 300 x 300 grid (two radix passes)");
+    TAP_EQ(cells_mismatches(&g, 2100, 300, 4), 0,
+           "cells: 2100 x 2100 grid (three radix passes), sparse rows");
+    TAP_EQ(cells_mismatches(&g, 7, 0, 5), 0, "cells: no items");
+    wm_cells_free(&g);
+    wm_cells_free(NULL);
     return TAP_DONE();
 }

@@ -193,10 +193,8 @@ typedef struct
     size_t npolys;
     /* river segments by cell of the block (side DCELL), each registered in
      * the cells its box grown by radius + DREACH touches; segments touching
-     * more than WIDE cells are in `wide` instead (CSR, owned) */
-    int32_t side;
-    size_t *cstart;
-    uint32_t *cseg;
+     * more than WIDE cells are in `wide` instead (owned) */
+    wm_cells cells;
     uint32_t *wide;
     size_t nwide;
 } inputs;
@@ -211,7 +209,8 @@ typedef struct
 static int32_t dcell(const inputs *in, double v)
 {
     const double c = floor(v / DCELL);
-    return c < 0 ? 0 : (c > in->side - 1 ? in->side - 1 : (int32_t)c);
+    const int32_t side = in->cells.side;
+    return c < 0 ? 0 : (c > side - 1 ? side - 1 : (int32_t)c);
 }
 
 /* Local box of river segment g grown by its radius + DREACH. */
@@ -226,55 +225,33 @@ static void seg_reach_box(const inputs *in, const wm_river_seg *g, double *b)
 
 static wm_status build_river_index(inputs *in, int32_t S)
 {
-    in->side = S / DCELL + 1;
-    const size_t ncell = (size_t)in->side * (size_t)in->side;
-    in->cstart = calloc(ncell + 1, sizeof *in->cstart);
+    wm_cells_reset(&in->cells, S / DCELL + 1);
     in->wide = malloc((in->nsegs + 1) * sizeof *in->wide);
-    if (!in->cstart || !in->wide)
+    if (!in->wide)
         return WM_ERR_NOMEM;
-    size_t *cur = NULL;
-    for (int pass = 0; pass < 2; pass++)
+    in->nwide = 0;
+    for (size_t i = 0; i < in->nsegs; i++)
     {
-        in->nwide = 0;
-        for (size_t i = 0; i < in->nsegs; i++)
+        double b[4];
+        int32_t x0, x1, y0, y1;
+        seg_reach_box(in, &in->s->segs[in->segs[i]], b);
+        if (b[2] < 0 || b[3] < 0 || b[0] > S || b[1] > S)
+            continue; /* never within reach of the block */
+        x0 = dcell(in, b[0]);
+        x1 = dcell(in, b[2]);
+        y0 = dcell(in, b[1]);
+        y1 = dcell(in, b[3]);
+        if ((int64_t)(x1 - x0 + 1) * (y1 - y0 + 1) > WIDE)
         {
-            double b[4];
-            int32_t x0, x1, y0, y1;
-            seg_reach_box(in, &in->s->segs[in->segs[i]], b);
-            if (b[2] < 0 || b[3] < 0 || b[0] > S || b[1] > S)
-                continue; /* never within reach of the block */
-            x0 = dcell(in, b[0]);
-            x1 = dcell(in, b[2]);
-            y0 = dcell(in, b[1]);
-            y1 = dcell(in, b[3]);
-            if ((int64_t)(x1 - x0 + 1) * (y1 - y0 + 1) > WIDE)
-            {
-                in->wide[in->nwide++] = in->segs[i];
-                continue;
-            }
-            for (int32_t cy = y0; cy <= y1; cy++)
-                for (int32_t cx = x0; cx <= x1; cx++)
-                {
-                    const size_t c = (size_t)cy * (size_t)in->side + (size_t)cx;
-                    if (pass == 0)
-                        in->cstart[c + 1]++;
-                    else
-                        in->cseg[cur[c]++] = in->segs[i];
-                }
+            in->wide[in->nwide++] = in->segs[i];
+            continue;
         }
-        if (pass == 0)
-        {
-            cur = wm_csr_begin(in->cstart, ncell);
-            in->cseg = malloc((in->cstart[ncell] + 1) * sizeof *in->cseg);
-            if (!cur || !in->cseg)
-            {
-                free(cur);
-                return WM_ERR_NOMEM;
-            }
-        }
+        for (int32_t cy = y0; cy <= y1; cy++)
+            for (int32_t cx = x0; cx <= x1; cx++)
+                if (!wm_cells_add(&in->cells, cx, cy, in->segs[i]))
+                    return WM_ERR_NOMEM;
     }
-    free(cur);
-    return WM_OK;
+    return wm_cells_index(&in->cells);
 }
 
 /* Distance from (x, y) (block-local, double) to segment (global ends). */
@@ -300,13 +277,14 @@ static double union_distance(const inputs *in, double x, double y, double reach)
     double d = reach;
     const double gx = x + (double)in->X0, gy = y + (double)in->Y0;
     /* the segments within reach are in the point's cell, or wide */
-    const size_t c =
-        (size_t)dcell(in, y) * (size_t)in->side + (size_t)dcell(in, x);
-    const size_t n0 = in->cstart[c + 1] - in->cstart[c];
+    size_t c0, c1;
+    const int32_t cx = dcell(in, x);
+    wm_cells_row(&in->cells, dcell(in, y), cx, cx, &c0, &c1);
+    const size_t n0 = c1 - c0;
     for (size_t i = 0; i < n0 + in->nwide; i++)
     {
         const wm_river_seg *g =
-            &s->segs[i < n0 ? in->cseg[in->cstart[c] + i] : in->wide[i - n0]];
+            &s->segs[i < n0 ? in->cells.item[c0 + i] : in->wide[i - n0]];
         const double m = g->r + reach;
         if (gx < (double)(g->ax < g->bx ? g->ax : g->bx) - m ||
             gx > (double)(g->ax > g->bx ? g->ax : g->bx) + m ||
@@ -374,7 +352,7 @@ static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
  * 5 degree wedge (pixel / (2 tan 2.5 deg) = 11.5 px) is within reach. */
 #define WM_CREASE_REACH (16 * WM_Q)
 
-/* The rings' edges in a dense grid over the block (CSR by cell). With an
+/* The rings' edges by cell of a grid over the block. With an
  * `active` mask only the marked cells hold their edges: a later pass looks
  * only near the corners just inserted, and a query reaching an unmarked
  * cell completes the grid first (visit_edges), so a query never misses an
@@ -383,8 +361,7 @@ typedef struct
 {
     const wm_rings *r;
     int32_t side;    /* cells per side */
-    size_t *start;   /* side*side + 1 */
-    uint32_t *edges; /* edge k = from vertex k to its successor */
+    wm_cells cells;  /* edge k = from vertex k to its successor */
     size_t *ring_of; /* vertex -> ring */
     uint8_t *active; /* side*side, or NULL: every cell registered (owned) */
 } ringgrid;
@@ -442,88 +419,40 @@ static void edge_cells(const ringgrid *g, wm_pt a, wm_pt b, int32_t *cb)
 static wm_status fill_ringgrid(ringgrid *g)
 {
     const wm_rings *r = g->r;
-    const size_t ncell = (size_t)g->side * (size_t)g->side;
-    size_t *cur = NULL;
-    uint32_t *sel = NULL; /* the edges registered in some cell */
-    size_t nsel = 0;
-    free(g->start);
-    free(g->edges);
-    g->edges = NULL;
-    g->start = calloc(ncell + 1, sizeof *g->start);
-    sel = malloc((r->npts + 1) * sizeof *sel);
-    if (!g->start || !sel)
-        goto nomem;
-    for (int pass = 0; pass < 2; pass++)
+    wm_cells_reset(&g->cells, g->side);
+    for (size_t ri = 0; ri < r->nrings; ri++)
     {
-        /* pass 0 counts (rings walked directly, in runs), pass 1 fills */
-        for (size_t ri = 0; pass == 0 && ri < r->nrings; ri++)
+        const size_t b0 = r->start[ri], e = r->start[ri + 1];
+        for (size_t k0 = b0; k0 < e; k0 += CHUNK)
         {
-            const size_t b0 = r->start[ri], e = r->start[ri + 1];
-            for (size_t k0 = b0; k0 < e; k0 += CHUNK)
+            const size_t k1 = k0 + CHUNK < e ? k0 + CHUNK : e;
+            int32_t x0 = INT32_MAX, y0 = INT32_MAX, x1 = INT32_MIN,
+                    y1 = INT32_MIN;
+            for (size_t k = k0; g->active && k <= k1; k++)
             {
-                const size_t k1 = k0 + CHUNK < e ? k0 + CHUNK : e;
-                int32_t x0 = INT32_MAX, y0 = INT32_MAX, x1 = INT32_MIN,
-                        y1 = INT32_MIN;
-                for (size_t k = k0; k <= k1; k++)
-                {
-                    const wm_pt p = r->pts[k < e ? k : b0];
-                    x0 = p.x < x0 ? p.x : x0;
-                    x1 = p.x > x1 ? p.x : x1;
-                    y0 = p.y < y0 ? p.y : y0;
-                    y1 = p.y > y1 ? p.y : y1;
-                }
-                if (!box_active(g, x0, y0, x1, y1))
-                    continue;
-                for (size_t k = k0; k < k1; k++)
-                {
-                    int32_t cb[4];
-                    edge_cells(g, r->pts[k], r->pts[k + 1 < e ? k + 1 : b0],
-                               cb);
-                    int any = 0;
-                    for (int32_t cy = cb[1]; cy <= cb[3]; cy++)
-                        for (int32_t cx = cb[0]; cx <= cb[2]; cx++)
-                        {
-                            const size_t c =
-                                (size_t)cy * (size_t)g->side + (size_t)cx;
-                            if (g->active && !g->active[c])
-                                continue;
-                            any = 1;
-                            g->start[c + 1]++;
-                        }
-                    if (any)
-                        sel[nsel++] = (uint32_t)k;
-                }
+                const wm_pt p = r->pts[k < e ? k : b0];
+                x0 = p.x < x0 ? p.x : x0;
+                x1 = p.x > x1 ? p.x : x1;
+                y0 = p.y < y0 ? p.y : y0;
+                y1 = p.y > y1 ? p.y : y1;
+            }
+            if (g->active && !box_active(g, x0, y0, x1, y1))
+                continue;
+            for (size_t k = k0; k < k1; k++)
+            {
+                int32_t cb[4];
+                edge_cells(g, r->pts[k], r->pts[k + 1 < e ? k + 1 : b0], cb);
+                for (int32_t cy = cb[1]; cy <= cb[3]; cy++)
+                    for (int32_t cx = cb[0]; cx <= cb[2]; cx++)
+                        if ((!g->active ||
+                             g->active[(size_t)cy * (size_t)g->side +
+                                       (size_t)cx]) &&
+                            !wm_cells_add(&g->cells, cx, cy, (uint32_t)k))
+                            return WM_ERR_NOMEM;
             }
         }
-        if (pass == 0)
-        {
-            cur = wm_csr_begin(g->start, ncell);
-            g->edges = malloc((g->start[ncell] + 1) * sizeof *g->edges);
-            if (!g->edges || !cur)
-                goto nomem;
-            continue;
-        }
-        for (size_t i = 0; i < nsel; i++)
-        {
-            const size_t k = sel[i];
-            int32_t cb[4];
-            edge_cells(g, r->pts[k], r->pts[succ(r, g->ring_of, k)], cb);
-            for (int32_t cy = cb[1]; cy <= cb[3]; cy++)
-                for (int32_t cx = cb[0]; cx <= cb[2]; cx++)
-                {
-                    const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
-                    if (!g->active || g->active[c])
-                        g->edges[cur[c]++] = (uint32_t)k;
-                }
-        }
     }
-    free(cur);
-    free(sel);
-    return WM_OK;
-nomem:
-    free(cur);
-    free(sel);
-    return WM_ERR_NOMEM;
+    return wm_cells_index(&g->cells);
 }
 
 /* The grid of rings r over a block of side S: every edge registered, or
@@ -545,8 +474,7 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S,
 
 static void free_ringgrid(ringgrid *g)
 {
-    free(g->start);
-    free(g->edges);
+    wm_cells_free(&g->cells);
     free(g->ring_of);
     free(g->active);
 }
@@ -571,13 +499,13 @@ static int visit_edges(ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
                 break;
             }
     for (int32_t cy = cy0; cy <= cy1; cy++)
-        for (int32_t cx = cx0; cx <= cx1; cx++)
-        {
-            const size_t c = (size_t)cy * (size_t)g->side + (size_t)cx;
-            for (size_t i = g->start[c]; i < g->start[c + 1]; i++)
-                if (!fn(arg, g->edges[i]))
-                    return 0;
-        }
+    {
+        size_t b, e;
+        wm_cells_row(&g->cells, cy, cx0, cx1, &b, &e);
+        for (size_t i = b; i < e; i++)
+            if (!fn(arg, g->cells.item[i]))
+                return 0;
+    }
     return 1;
 }
 
@@ -911,8 +839,8 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     wm_status st = WM_OK;
     prim *pr = NULL;
     size_t npr = 0, prcap = 0;
-    size_t *pcs = NULL, *pcur = NULL; /* primitives by cell (CSR) */
-    uint32_t *pcr = NULL;
+    wm_cells pg; /* primitives by cell */
+    memset(&pg, 0, sizeof pg);
     wm_pt *cand = NULL, *try0 = NULL;
     size_t ncand = 0, candcap = 0;
 
@@ -981,85 +909,69 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     if (npr > UINT32_MAX)
         goto cleanup;
 
-    /* 2. candidates: pairs sharing a grid cell (CSR over the cells of the
-     * block grown by 4 px), found once (in the cell holding the
-     * intersection) */
+    /* 2. candidates: pairs sharing a grid cell (cells over the block grown
+     * by 4 px), found once (in the cell holding the intersection) */
     const double PC = 16.0 * WM_Q;
     const int64_t cmin = (int64_t)floor(lo / PC);
     const int64_t cside = (int64_t)floor(hi / PC) - cmin + 1;
-    const size_t ncell = (size_t)(cside * cside);
-    pcs = calloc(ncell + 1, sizeof *pcs);
-    if (!pcs)
+    wm_cells_reset(&pg, (int32_t)cside);
+    for (size_t i = 0; i < npr; i++)
+    {
+        double b[4];
+        prim_box(&pr[i], b);
+        b[0] = fmax(b[0], lo);
+        b[1] = fmax(b[1], lo);
+        b[2] = fmin(b[2], hi);
+        b[3] = fmin(b[3], hi);
+        if (b[0] > b[2] || b[1] > b[3])
+            continue;
+        const int32_t x0 = (int32_t)((int64_t)floor(b[0] / PC) - cmin);
+        const int32_t x1 = (int32_t)((int64_t)floor(b[2] / PC) - cmin);
+        const int32_t y0 = (int32_t)((int64_t)floor(b[1] / PC) - cmin);
+        const int32_t y1 = (int32_t)((int64_t)floor(b[3] / PC) - cmin);
+        for (int32_t cy = y0; cy <= y1; cy++)
+            for (int32_t cx = x0; cx <= x1; cx++)
+                if (!wm_cells_add(&pg, cx, cy, (uint32_t)i))
+                    goto nomem;
+    }
+    if (wm_cells_index(&pg) != WM_OK)
         goto nomem;
-    for (int pass = 0; pass < 2; pass++)
-    {
-        for (size_t i = 0; i < npr; i++)
+    for (int32_t row = 0; row < pg.side; row++)
+        for (size_t cell = pg.row[row]; cell < pg.row[row + 1]; cell++)
         {
-            double b[4];
-            prim_box(&pr[i], b);
-            b[0] = fmax(b[0], lo);
-            b[1] = fmax(b[1], lo);
-            b[2] = fmin(b[2], hi);
-            b[3] = fmin(b[3], hi);
-            if (b[0] > b[2] || b[1] > b[3])
-                continue;
-            const int64_t x0 = (int64_t)floor(b[0] / PC) - cmin;
-            const int64_t x1 = (int64_t)floor(b[2] / PC) - cmin;
-            const int64_t y0 = (int64_t)floor(b[1] / PC) - cmin;
-            const int64_t y1 = (int64_t)floor(b[3] / PC) - cmin;
-            for (int64_t cy = y0; cy <= y1; cy++)
-                for (int64_t cx = x0; cx <= x1; cx++)
+            const size_t a = pg.start[cell], z = pg.start[cell + 1];
+            const int64_t cx = pg.col[cell] + cmin, cy = row + cmin;
+            for (size_t i = a; i < z; i++)
+                for (size_t j = i + 1; j < z; j++)
                 {
-                    const size_t c = (size_t)(cy * cside + cx);
-                    if (pass == 0)
-                        pcs[c + 1]++;
-                    else
-                        pcr[pcur[c]++] = (uint32_t)i;
+                    const prim *p = &pr[pg.item[i]], *q = &pr[pg.item[j]];
+                    if (p->item == q->item)
+                        continue;
+                    dpt hit[2];
+                    const int nh = intersect(p, q, hit);
+                    for (int h = 0; h < nh; h++)
+                    {
+                        if (floor(hit[h].x / PC) != (double)cx ||
+                            floor(hit[h].y / PC) != (double)cy)
+                            continue;
+                        if (!(hit[h].x >= WM_Q && hit[h].x <= S - WM_Q &&
+                              hit[h].y >= WM_Q && hit[h].y <= S - WM_Q))
+                            continue; /* keep a pixel off the block square */
+                        const wm_pt c = {(int32_t)llround(hit[h].x),
+                                         (int32_t)llround(hit[h].y)};
+                        /* the field is 1-Lipschitz: a point of the boundary is
+                         * within 0.71 px of a sample valued within 0.71 px of
+                         * 0; anything else is buried under another input */
+                        const float v = wm_field_at(f, (c.x + WM_Q / 2) / WM_Q,
+                                                    (c.y + WM_Q / 2) / WM_Q);
+                        if (fabsf(v) > 0.75f)
+                            continue;
+                        if (!push((void **)&cand, &ncand, &candcap, &c,
+                                  sizeof c))
+                            goto nomem;
+                    }
                 }
         }
-        if (pass == 0)
-        {
-            pcur = wm_csr_begin(pcs, ncell);
-            pcr = malloc((pcs[ncell] + 1) * sizeof *pcr);
-            if (!pcur || !pcr)
-                goto nomem;
-        }
-    }
-    for (size_t cell = 0; cell < ncell; cell++)
-    {
-        const size_t a = pcs[cell], z = pcs[cell + 1];
-        const int64_t cx = (int64_t)(cell % (size_t)cside) + cmin;
-        const int64_t cy = (int64_t)(cell / (size_t)cside) + cmin;
-        for (size_t i = a; i < z; i++)
-            for (size_t j = i + 1; j < z; j++)
-            {
-                const prim *p = &pr[pcr[i]], *q = &pr[pcr[j]];
-                if (p->item == q->item)
-                    continue;
-                dpt hit[2];
-                const int nh = intersect(p, q, hit);
-                for (int h = 0; h < nh; h++)
-                {
-                    if (floor(hit[h].x / PC) != (double)cx ||
-                        floor(hit[h].y / PC) != (double)cy)
-                        continue;
-                    if (!(hit[h].x >= WM_Q && hit[h].x <= S - WM_Q &&
-                          hit[h].y >= WM_Q && hit[h].y <= S - WM_Q))
-                        continue; /* keep a pixel off the block square */
-                    const wm_pt c = {(int32_t)llround(hit[h].x),
-                                     (int32_t)llround(hit[h].y)};
-                    /* the field is 1-Lipschitz: a point of the boundary is
-                     * within 0.71 px of a sample valued within 0.71 px of
-                     * 0; anything else is buried under another input */
-                    const float v = wm_field_at(f, (c.x + WM_Q / 2) / WM_Q,
-                                                (c.y + WM_Q / 2) / WM_Q);
-                    if (fabsf(v) > 0.75f)
-                        continue;
-                    if (!push((void **)&cand, &ncand, &candcap, &c, sizeof c))
-                        goto nomem;
-                }
-            }
-    }
     if (ncand == 0)
         goto cleanup;
     qsort(cand, ncand, sizeof *cand, cmp_pt);
@@ -1110,13 +1022,10 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
 nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory recovering corners");
 cleanup:
-    free(in.cstart);
-    free(in.cseg);
+    wm_cells_free(&in.cells);
     free(in.wide);
     free(pr);
-    free(pcs);
-    free(pcur);
-    free(pcr);
+    wm_cells_free(&pg);
     free(try0);
     free(cand);
     return st;

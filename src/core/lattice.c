@@ -135,3 +135,87 @@ int wm_point_in_ring(const wm_pt *ring, size_t n, wm_pt p)
     }
     return inside;
 }
+
+void wm_cells_reset(wm_cells *g, int32_t side)
+{
+    g->side = side;
+    g->npairs = 0;
+    g->nocc = 0;
+}
+
+/* Bits of a radix digit: 2^11 counters stay in the L1 cache. */
+#define CELL_DIGIT 11
+
+wm_status wm_cells_index(wm_cells *g)
+{
+    const size_t side = (size_t)g->side, n = g->npairs;
+    if (!wm_grow((void **)&g->row, &g->cap_row, side + 1, sizeof *g->row) ||
+        !wm_grow((void **)&g->tmp, &g->cap_tmp, n + 1, sizeof *g->tmp))
+        return WM_ERR_NOMEM;
+    /* stable LSD radix sort on the cell (bits 32 and up) */
+    const uint64_t maxcell = side * side;
+    for (int shift = 32; shift < 64 && (maxcell >> (shift - 32)) > 0;
+         shift += CELL_DIGIT)
+    {
+        size_t count[1 << CELL_DIGIT] = {0};
+        const uint64_t mask = (1u << CELL_DIGIT) - 1;
+        for (size_t i = 0; i < n; i++)
+            count[(g->pairs[i] >> shift) & mask]++;
+        for (size_t d = 0, sum = 0; d < (1u << CELL_DIGIT); d++)
+        {
+            const size_t c = count[d];
+            count[d] = sum;
+            sum += c;
+        }
+        for (size_t i = 0; i < n; i++)
+            g->tmp[count[(g->pairs[i] >> shift) & mask]++] = g->pairs[i];
+        uint64_t *t = g->pairs;
+        g->pairs = g->tmp;
+        g->tmp = t;
+        const size_t c = g->cap_pairs;
+        g->cap_pairs = g->cap_tmp;
+        g->cap_tmp = c;
+    }
+    /* occupied cells */
+    size_t nocc = 0;
+    for (size_t i = 0; i < n; i++)
+        nocc += i == 0 || (g->pairs[i] >> 32) != (g->pairs[i - 1] >> 32);
+    if (!wm_grow((void **)&g->col, &g->cap_col, nocc + 1, sizeof *g->col) ||
+        !wm_grow((void **)&g->start, &g->cap_start, nocc + 1,
+                 sizeof *g->start) ||
+        !wm_grow((void **)&g->item, &g->cap_item, n + 1, sizeof *g->item))
+        return WM_ERR_NOMEM;
+    size_t o = 0, y = 0;
+    g->row[0] = 0;
+    for (size_t i = 0; i < n; i++)
+    {
+        const uint64_t cell = g->pairs[i] >> 32;
+        if (i == 0 || cell != g->pairs[i - 1] >> 32)
+        {
+            const size_t cy = (size_t)(cell / side);
+            while (y < cy)
+                g->row[++y] = o;
+            g->col[o] = (int32_t)(cell - cy * side);
+            g->start[o++] = i;
+        }
+        g->item[i] = (uint32_t)g->pairs[i];
+    }
+    while (y < side)
+        g->row[++y] = o;
+    g->start[o] = n;
+    g->nocc = o;
+    return WM_OK;
+}
+
+void wm_cells_free(wm_cells *g)
+{
+    if (!g)
+        return;
+    free(g->row);
+    free(g->col);
+    free(g->start);
+    free(g->item);
+    free(g->pairs);
+    free(g->tmp);
+    memset(g, 0, sizeof *g);
+}

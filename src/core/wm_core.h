@@ -118,6 +118,79 @@ extern "C"
      */
     int wm_grow(void **buf, size_t *cap, size_t need, size_t elem);
 
+    /**
+     * Items by cell of a side x side grid, only the occupied cells stored:
+     * building and memory grow with the (cell, item) pairs, not with the
+     * grid's area. Invariants once indexed: the occupied cells of row y are
+     * row[y] .. row[y + 1] - 1, in ascending column col[]; the items of
+     * occupied cell i are item[start[i] .. start[i + 1] - 1], in the order
+     * they were added. So the items of the cells x0 .. x1 of a row are one
+     * contiguous run (wm_cells_row).
+     *
+     * Use: memset to 0, wm_cells_reset(side) (also to reuse), wm_cells_add
+     * for each pair, wm_cells_index, queries; wm_cells_free.
+     */
+    typedef struct
+    {
+        int32_t side;    /**< cells per side, at most 65535 */
+        size_t *row;     /**< side + 1 */
+        int32_t *col;    /**< nocc */
+        size_t *start;   /**< nocc + 1 */
+        uint32_t *item;  /**< npairs, grouped by cell */
+        size_t nocc;     /**< occupied cells */
+        uint64_t *pairs; /**< build buffer: cell << 32 | item, then the
+                              sorted pairs */
+        size_t npairs;
+        size_t cap_pairs, cap_row, cap_col, cap_start, cap_item, cap_tmp;
+        uint64_t *tmp; /**< radix sort scratch */
+    } wm_cells;
+
+    /** Empties g for a grid of side x side cells (keeps its memory). */
+    void wm_cells_reset(wm_cells *g, int32_t side);
+
+    /** Adds `item` to cell (x, y), 0 <= x, y < side. Returns 0 when out of
+     *  memory. */
+    static inline int wm_cells_add(wm_cells *g, int32_t x, int32_t y,
+                                   uint32_t item)
+    {
+        if (g->npairs == g->cap_pairs &&
+            !wm_grow((void **)&g->pairs, &g->cap_pairs, g->npairs + 1,
+                     sizeof *g->pairs))
+            return 0;
+        const uint64_t cell = (uint64_t)y * (uint64_t)g->side + (uint64_t)x;
+        g->pairs[g->npairs++] = cell << 32 | item;
+        return 1;
+    }
+
+    /** Sorts the pairs added since the reset into cells (stable: a cell's
+     *  items keep their order of addition). Returns WM_ERR_NOMEM or WM_OK. */
+    wm_status wm_cells_index(wm_cells *g);
+
+    /** The run item[*b .. *e - 1] of the items of cells x0 .. x1 of row y
+     *  (the caller clamps to the grid). */
+    static inline void wm_cells_row(const wm_cells *g, int32_t y, int32_t x0,
+                                    int32_t x1, size_t *b, size_t *e)
+    {
+        size_t lo = g->row[y], hi = g->row[y + 1];
+        while (lo < hi) /* first cell at or right of x0 */
+        {
+            const size_t mid = lo + (hi - lo) / 2;
+            if (g->col[mid] < x0)
+                lo = mid + 1;
+            else
+                hi = mid;
+        }
+        hi = g->row[y + 1];
+        size_t end = lo;
+        while (end < hi && g->col[end] <= x1)
+            end++;
+        *b = g->start[lo];
+        *e = g->start[end];
+    }
+
+    /** Frees what g owns (g may be NULL) and zeroes it. */
+    void wm_cells_free(wm_cells *g);
+
     /** Number of vertices of ring i. */
     static inline size_t wm_rings_len(const wm_rings *r, size_t i)
     {
