@@ -26,9 +26,16 @@
  * the operands. So a sample's value depends only on its global index and
  * the input, never on the window or tile that computed it.
  *
+ * Narrow band (C path). Within a tile, the evaluation skips the 4 x 4
+ * sub-blocks that a bound at their centre proves to lie wholly at -band
+ * (inside a river or lake by more than the band) or at +band (see
+ * narrow_band): the values are the same bits, only fewer are computed
+ * (about a quarter of the samples of mixed tiles on the synthetic L3).
+ *
  * Cost: O(samples in mixed tiles x items in reach + rows x polygon edges
- * spanning them). Memory: (WM_TILE+1)^2 floats per mixed tile, plus crossing
- * lists over each polygon's own rows (its box), never polygons x rows.
+ * spanning them), the first term only over the narrow band. Memory:
+ * (WM_TILE+1)^2 floats per mixed tile, plus crossing lists over each polygon's
+ * own rows (its box), never polygons x rows.
  */
 #include "field.h"
 
@@ -483,24 +490,46 @@ static void row_span(int64_t Y, int64_t ay, int64_t by, double reach,
     *j1 = hi < -1 ? -1 : (hi > TS1 - 1 ? TS1 - 1 : (int32_t)hi);
 }
 
-/* v = min(v, |p - seg| - r) over a full tile, v <= bandl: rows farther
- * than r + bandl from the segment are left alone (the term exceeds v). */
+/* Sub-blocks: the tile's samples in NSB x NSB blocks of SB x SB, the last
+ * row and column of blocks one sample larger (they hold sample WM_TILE).
+ * Sample (i, j) is in block (sb_of(i), sb_of(j)). */
+#define SB 4
+#define NSB (WM_TILE / SB)
+
+static inline int32_t sb_of(int32_t i)
+{
+    return i / SB < NSB ? i / SB : NSB - 1;
+}
+
+/* The samples of a tile a batch evaluates: per row of sub-blocks, the
+ * columns lo .. hi (lo > hi: none) spanning its active blocks. */
+typedef struct
+{
+    int32_t lo[NSB], hi[NSB];
+} span;
+
+/* v = min(v, |p - seg| - r) over the spanned samples of a tile, v <= bandl:
+ * rows farther than r + bandl from the segment are left alone (the term
+ * exceeds v). */
 WM_CLONES
 static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
-                      double bandl)
+                      double bandl, const span *sp)
 {
     const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
     const double len2 = abx * abx + aby * aby;
     const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
     const double ox = (double)(X - g->ax), oy = (double)(Y - g->ay);
     const double r = g->r;
-    int32_t j0, j1;
+    int32_t j0, j1, i0, i1;
     row_span(Y, g->ay, g->by, r + bandl, &j0, &j1);
+    row_span(X, g->ax, g->bx, r + bandl, &i0, &i1); /* columns alike */
     for (int32_t j = j0; j <= j1; j++)
     {
         const double py = oy + (double)j * WM_Q;
         double *row = v + j * TS1;
-        for (int32_t i = 0; i < TS1; i++)
+        const int32_t lo = sp->lo[sb_of(j)] > i0 ? sp->lo[sb_of(j)] : i0;
+        const int32_t hi = sp->hi[sb_of(j)] < i1 ? sp->hi[sb_of(j)] : i1;
+        for (int32_t i = lo; i <= hi; i++)
         {
             const double d =
                 sqrt(seg_d2(ox + (double)i * WM_Q, py, abx, aby, inv)) - r;
@@ -510,24 +539,27 @@ static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
     }
 }
 
-/* du2 = min(du2, d^2 to edge) over a full tile; rows farther than bandl
- * from the edge are left alone (as if the edge were out of reach: the
- * distance only matters up to the clamp). */
+/* du2 = min(du2, d^2 to edge) over the spanned samples of a tile; rows
+ * farther than bandl from the edge are left alone (as if the edge were out
+ * of reach: the distance only matters up to the clamp). */
 WM_CLONES
 static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
-                      double bandl)
+                      double bandl, const span *sp)
 {
     const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
     const double len2 = abx * abx + aby * aby;
     const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
     const double ox = (double)(X - g->ax), oy = (double)(Y - g->ay);
-    int32_t j0, j1;
+    int32_t j0, j1, i0, i1;
     row_span(Y, g->ay, g->by, bandl, &j0, &j1);
+    row_span(X, g->ax, g->bx, bandl, &i0, &i1);
     for (int32_t j = j0; j <= j1; j++)
     {
         const double py = oy + (double)j * WM_Q;
         double *row = du2 + j * TS1;
-        for (int32_t i = 0; i < TS1; i++)
+        const int32_t lo = sp->lo[sb_of(j)] > i0 ? sp->lo[sb_of(j)] : i0;
+        const int32_t hi = sp->hi[sb_of(j)] < i1 ? sp->hi[sb_of(j)] : i1;
+        for (int32_t i = lo; i <= hi; i++)
         {
             const double d2 = seg_d2(ox + (double)i * WM_Q, py, abx, aby, inv);
             const double cur = row[i];
@@ -536,20 +568,153 @@ static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
     }
 }
 
-/* v = min(v, +/- sqrt(du2)) over a full tile, the sign - where the
- * polygon's parity bit is set (multiplying by +/-1 is exact). */
+/* v = min(v, +/- sqrt(du2)) over the spanned samples of a tile, the sign
+ * - where the polygon's parity bit is set (multiplying by +/-1 is exact). */
 WM_CLONES
-static void lake_min(const double *du2, const uint64_t *mask, double *v)
+static void lake_min(const double *du2, const uint64_t *mask, double *v,
+                     const span *sp)
 {
     for (int32_t j = 0; j < TS1; j++)
     {
         const uint64_t m = mask[j];
-        for (int32_t q = 0; q < TS1; q++)
+        const int32_t lo = sp->lo[sb_of(j)], hi = sp->hi[sb_of(j)];
+        for (int32_t q = lo; q <= hi; q++)
         {
             const double sign = 1.0 - 2.0 * (double)((m >> q) & 1);
             const double d = sign * sqrt(du2[j * TS1 + q]);
             v[j * TS1 + q] = d < v[j * TS1 + q] ? d : v[j * TS1 + q];
         }
+    }
+}
+
+/* Centre and half-extent, in samples, of sub-block b along an axis. */
+static inline double sb_centre(int32_t b)
+{
+    return b < NSB - 1 ? b * SB + (SB - 1) / 2.0
+                       : ((NSB - 1) * SB + WM_TILE) / 2.0;
+}
+
+static inline double sb_half(int32_t b)
+{
+    return b < NSB - 1 ? (SB - 1) / 2.0 : (WM_TILE - (NSB - 1) * SB) / 2.0;
+}
+
+/* d2 = squared distances from the sub-block centres of a tile (sample
+ * (0, 0) at lattice (X, Y)) to segment [a, b]. */
+WM_CLONES
+static void centre_d2(int64_t ax, int64_t ay, int64_t bx, int64_t by, int64_t X,
+                      int64_t Y, double *d2)
+{
+    const double abx = (double)(bx - ax), aby = (double)(by - ay);
+    const double len2 = abx * abx + aby * aby;
+    const double inv = len2 > 0 ? 1.0 / len2 : 0.0;
+    const double ox = (double)(X - ax), oy = (double)(Y - ay);
+    for (int32_t b = 0; b < NSB; b++)
+        for (int32_t a = 0; a < NSB; a++)
+            d2[b * NSB + a] = seg_d2(ox + sb_centre(a) * WM_Q,
+                                     oy + sb_centre(b) * WM_Q, abx, aby, inv);
+}
+
+/* The narrow band of batch tile k (sample (0, 0) at lattice (X, Y)): sets
+ * v to its starting values and *sp to the samples to evaluate.
+ *
+ * A sub-block of half-diagonal h (lattice) whose centre c has
+ *   - a river term |c - seg| - r <= -tol, tol = bandl + h + 1, has that
+ *     term below -bandl - 1 at each of its samples (the term is
+ *     1-Lipschitz), so every sample there ends at -band: "deep";
+ *   - a lake polygon's edges in reach all >= tol from c, so none crosses
+ *     the block and its parity is the same at every sample (the mask's,
+ *     at the block's first sample), and its term at each sample is at
+ *     least bandl + 1 in magnitude: with parity 1 the block is deep;
+ *   - every river term >= tol and every lake as above with parity 0: every
+ *     term is at least bandl + 1 at each sample, which ends at +band: "far".
+ * Deep samples start at -bandl, the others at +bandl; the evaluation then
+ * leaves them where they are (a min can only keep a deep sample at or below
+ * -bandl, and no term goes below bandl at a far one), so it may skip them:
+ * the values are those of the whole tile's evaluation, bit for bit. The
+ * margin of one lattice unit dwarfs the rounding of double arithmetic on
+ * coordinates below 2^40. */
+WM_CLONES
+static void narrow_band(const wm_field_batch *bt, size_t k, int64_t X,
+                        int64_t Y, double bandl, double *v, span *sp)
+{
+    const wm_scene *s = bt->s;
+    double cm[NSB * NSB], ce2[NSB * NSB], tol[NSB * NSB], d2[NSB * NSB];
+    uint8_t deep[NSB * NSB], far[NSB * NSB];
+    for (int32_t b = 0; b < NSB; b++)
+        for (int32_t a = 0; a < NSB; a++)
+        {
+            const double ha = sb_half(a), hb = sb_half(b);
+            tol[b * NSB + a] = bandl + 1.0 + sqrt(ha * ha + hb * hb) * WM_Q;
+            cm[b * NSB + a] = INFINITY;
+        }
+    for (size_t i = bt->seg_start[k]; i < bt->seg_start[k + 1]; i++)
+    {
+        const wm_river_seg *g = &s->segs[bt->seg[i]];
+        centre_d2(g->ax, g->ay, g->bx, g->by, X, Y, d2);
+        for (int32_t q = 0; q < NSB * NSB; q++)
+        {
+            const double d = sqrt(d2[q]) - g->r;
+            cm[q] = d < cm[q] ? d : cm[q];
+        }
+    }
+    for (int32_t q = 0; q < NSB * NSB; q++)
+    {
+        deep[q] = cm[q] <= -tol[q];
+        far[q] = cm[q] >= tol[q];
+    }
+    for (size_t g = bt->grp_start[k]; g < bt->grp_start[k + 1]; g++)
+    {
+        for (int32_t q = 0; q < NSB * NSB; q++)
+            ce2[q] = INFINITY;
+        for (size_t i = bt->edge_start[g]; i < bt->edge_start[g + 1]; i++)
+        {
+            const wm_lake_edge *e = &s->edges[bt->edge[i]];
+            centre_d2(e->ax, e->ay, e->bx, e->by, X, Y, d2);
+            for (int32_t q = 0; q < NSB * NSB; q++)
+                ce2[q] = d2[q] < ce2[q] ? d2[q] : ce2[q];
+        }
+        for (int32_t b = 0; b < NSB; b++)
+            for (int32_t a = 0; a < NSB; a++)
+            {
+                const int32_t q = b * NSB + a;
+                if (ce2[q] < tol[q] * tol[q])
+                    far[q] = 0;
+                else if ((bt->mask[g * TS1 + (size_t)(b * SB)] >> (a * SB)) & 1)
+                    deep[q] = 1;
+            }
+    }
+    for (int32_t q = 0; q < TS1 * TS1; q++)
+        v[q] = bandl;
+    for (int32_t b = 0; b < NSB; b++)
+        for (int32_t a = 0; a < NSB; a++)
+            if (deep[b * NSB + a])
+                for (int32_t j = b * SB;
+                     j <= (b == NSB - 1 ? WM_TILE : b * SB + SB - 1); j++)
+                    for (int32_t i = a * SB;
+                         i <= (a == NSB - 1 ? WM_TILE : a * SB + SB - 1); i++)
+                        v[j * TS1 + i] = -bandl;
+    for (int32_t b = 0; b < NSB; b++)
+    {
+        sp->lo[b] = TS1;
+        sp->hi[b] = -1;
+        for (int32_t a = 0; a < NSB; a++)
+            if (!deep[b * NSB + a] && !far[b * NSB + a])
+            {
+                sp->lo[b] = sp->lo[b] < a * SB ? sp->lo[b] : a * SB;
+                sp->hi[b] = a == NSB - 1 ? WM_TILE : a * SB + SB - 1;
+            }
+    }
+}
+
+/* out = v clamped below at -bandl, in pixels. */
+WM_CLONES
+static void clamp_out(const double *v, double bandl, float *out)
+{
+    for (int32_t j = 0; j < TS1 * TS1; j++)
+    {
+        const double d = v[j] < -bandl ? -bandl : v[j];
+        out[j] = (float)(d / WM_Q);
     }
 }
 
@@ -564,24 +729,20 @@ wm_status wm_field_eval_c(void *user, const wm_field_batch *b,
     for (size_t k = 0; k < b->ntiles; k++)
     {
         const int64_t X = b->org[2 * k], Y = b->org[2 * k + 1];
-        for (int32_t i = 0; i < TS1 * TS1; i++)
-            v[i] = bandl;
+        span sp;
+        narrow_band(b, k, X, Y, bandl, v, &sp);
         for (size_t i = b->seg_start[k]; i < b->seg_start[k + 1]; i++)
-            river_min(&s->segs[b->seg[i]], X, Y, v, bandl);
+            river_min(&s->segs[b->seg[i]], X, Y, v, bandl, &sp);
         for (size_t g = b->grp_start[k]; g < b->grp_start[k + 1]; g++)
         {
-            for (int32_t j = 0; j < TS1 * TS1; j++)
-                du2[j] = INFINITY;
+            for (int32_t j = 0; j < TS1; j++) /* what edge_min2 may set */
+                for (int32_t i = sp.lo[sb_of(j)]; i <= sp.hi[sb_of(j)]; i++)
+                    du2[j * TS1 + i] = INFINITY;
             for (size_t i = b->edge_start[g]; i < b->edge_start[g + 1]; i++)
-                edge_min2(&s->edges[b->edge[i]], X, Y, du2, bandl);
-            lake_min(du2, b->mask + g * TS1, v);
+                edge_min2(&s->edges[b->edge[i]], X, Y, du2, bandl, &sp);
+            lake_min(du2, b->mask + g * TS1, v, &sp);
         }
-        float *out = b->val + k * TS1 * TS1;
-        for (int32_t j = 0; j < TS1 * TS1; j++)
-        {
-            const double d = v[j] < -bandl ? -bandl : v[j];
-            out[j] = (float)(d / WM_Q);
-        }
+        clamp_out(v, bandl, b->val + k * TS1 * TS1);
     }
     return WM_OK;
 }
