@@ -360,19 +360,19 @@ static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
 typedef struct
 {
     const wm_rings *r;
-    int32_t side;    /* cells per side */
-    wm_cells cells;  /* edge k = from vertex k to its successor */
-    size_t *ring_of; /* vertex -> ring */
-    uint8_t *active; /* side*side, or NULL: every cell registered (owned) */
+    int32_t side;      /* cells per side */
+    wm_cells cells;    /* edge k = from vertex k to its successor */
+    uint32_t *ring_of; /* vertex -> ring */
+    uint8_t *active;   /* side*side, or NULL: every cell registered (owned) */
 } ringgrid;
 
-static size_t succ(const wm_rings *r, const size_t *ring_of, size_t k)
+static size_t succ(const wm_rings *r, const uint32_t *ring_of, size_t k)
 {
     const size_t ri = ring_of[k];
     return k + 1 == r->start[ri + 1] ? r->start[ri] : k + 1;
 }
 
-static size_t pred(const wm_rings *r, const size_t *ring_of, size_t k)
+static size_t pred(const wm_rings *r, const uint32_t *ring_of, size_t k)
 {
     const size_t ri = ring_of[k];
     return k == r->start[ri] ? r->start[ri + 1] - 1 : k - 1;
@@ -386,8 +386,6 @@ static int32_t cell_of(const ringgrid *g, int32_t v)
     return c >= g->side ? g->side - 1 : c;
 }
 
-/* Registers the edges of g->r (in the cells of g->active, or all), in a
- * grid whose ring_of is filled; (re)allocates start and edges. */
 /* Whether a cell of [x0, x1] x [y0, y1] (lattice box) is registered. */
 static int box_active(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
                       int32_t y1)
@@ -412,7 +410,8 @@ static void edge_cells(const ringgrid *g, wm_pt a, wm_pt b, int32_t *cb)
     cb[3] = cell_of(g, a.y > b.y ? a.y : b.y);
 }
 
-/* Edges are looked at in runs of CHUNK along a ring: a run whose box has
+/* fill_ringgrid registers the edges of g->r in the cells of g->active (or
+ * all), looking at them in runs of CHUNK along a ring: a run whose box has
  * no registered cell is passed over whole. */
 #define CHUNK 64
 
@@ -426,18 +425,21 @@ static wm_status fill_ringgrid(ringgrid *g)
         for (size_t k0 = b0; k0 < e; k0 += CHUNK)
         {
             const size_t k1 = k0 + CHUNK < e ? k0 + CHUNK : e;
-            int32_t x0 = INT32_MAX, y0 = INT32_MAX, x1 = INT32_MIN,
-                    y1 = INT32_MIN;
-            for (size_t k = k0; g->active && k <= k1; k++)
-            {
-                const wm_pt p = r->pts[k < e ? k : b0];
-                x0 = p.x < x0 ? p.x : x0;
-                x1 = p.x > x1 ? p.x : x1;
-                y0 = p.y < y0 ? p.y : y0;
-                y1 = p.y > y1 ? p.y : y1;
+            if (g->active)
+            { /* the run's box, its edges' ends */
+                const wm_pt z = r->pts[k1 < e ? k1 : b0];
+                int32_t x0 = z.x, y0 = z.y, x1 = z.x, y1 = z.y;
+                for (size_t k = k0; k < k1; k++)
+                {
+                    const wm_pt p = r->pts[k];
+                    x0 = p.x < x0 ? p.x : x0;
+                    x1 = p.x > x1 ? p.x : x1;
+                    y0 = p.y < y0 ? p.y : y0;
+                    y1 = p.y > y1 ? p.y : y1;
+                }
+                if (!box_active(g, x0, y0, x1, y1))
+                    continue;
             }
-            if (g->active && !box_active(g, x0, y0, x1, y1))
-                continue;
             for (size_t k = k0; k < k1; k++)
             {
                 int32_t cb[4];
@@ -468,7 +470,7 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S,
         return WM_ERR_NOMEM;
     for (size_t ri = 0; ri < r->nrings; ri++)
         for (size_t k = r->start[ri]; k < r->start[ri + 1]; k++)
-            g->ring_of[k] = ri;
+            g->ring_of[k] = (uint32_t)ri;
     return fill_ringgrid(g);
 }
 
@@ -661,17 +663,12 @@ static int cmp_u64(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Whether a corner of `hot` (sorted cell keys) is in a cell next to p. */
+/* Whether p is in a cell of `hot` (sorted keys of the cells next to the
+ * corners inserted by the previous pass). */
 static int near_hot(const uint64_t *hot, size_t nhot, wm_pt p)
 {
-    for (int dy = -1; dy <= 1; dy++)
-        for (int dx = -1; dx <= 1; dx++)
-        {
-            const uint64_t k = hot_key(p, dx, dy);
-            if (bsearch(&k, hot, nhot, sizeof *hot, cmp_u64))
-                return 1;
-        }
-    return 0;
+    const uint64_t k = hot_key(p, 0, 0);
+    return bsearch(&k, hot, nhot, sizeof *hot, cmp_u64) != NULL;
 }
 
 /* Marks the ring grid cells [x0, x1] x [y0, y1] (clamped) in a. */
@@ -689,11 +686,10 @@ static void mark_cells(uint8_t *a, int32_t side, int32_t x0, int32_t y0,
 }
 
 /* The ring grid cells a pass needs (owned by the caller). The first pass
- * tries `cand`; a later one the candidates in the 3 x 3 hot cells around a
- * corner of `hot`. Searches reach WM_CREASE_REACH (one cell) around a
- * candidate and the edges it may split a little farther: two cells of
- * margin cover that (a query beyond them completes the grid). NULL when out
- * of memory. */
+ * tries `cand`; a later one the candidates in the cells of `hot`. Searches
+ * reach WM_CREASE_REACH (one cell) around a candidate and the edges it may
+ * split a little farther: two cells of margin cover that (a query beyond them
+ * completes the grid). NULL when out of memory. */
 static uint8_t *pass_cells(const wm_pt *cand, size_t ncand, const uint64_t *hot,
                            size_t nhot, int32_t S)
 {
@@ -710,21 +706,22 @@ static uint8_t *pass_cells(const wm_pt *cand, size_t ncand, const uint64_t *hot,
     {
         const int32_t hx = (int32_t)(uint32_t)(hot[i] & 0xffffffffu);
         const int32_t hy = (int32_t)(uint32_t)(hot[i] >> 32);
-        mark_cells(a, side, (hx - 1) * per - 2, (hy - 1) * per - 2,
-                   (hx + 2) * per + 1, (hy + 2) * per + 1);
+        mark_cells(a, side, hx * per - 2, hy * per - 2, (hx + 1) * per + 1,
+                   (hy + 1) * per + 1);
     }
     return a;
 }
 
 /* One pass: tries the candidates against the current rings and rebuilds
  * them with the accepted corners; *ninserted says how many. With hot
- * (sorted cell keys of the corners the previous pass inserted), only the
- * candidates near those are tried; *newhot receives this pass's (caller
- * frees). */
+ * (sorted keys of the hot cells next to the corners the previous pass
+ * inserted), only the candidates in those are tried; *newhot receives this
+ * pass's (*nnewhot keys, caller frees). */
 static wm_status insert_pass(const inputs *in, wm_rings *rings,
                              const wm_pt *cand, size_t ncand,
                              const uint64_t *hot, size_t nhot,
-                             uint64_t **newhot, size_t *ninserted)
+                             uint64_t **newhot, size_t *nnewhot,
+                             size_t *ninserted)
 {
     wm_status st = WM_OK;
     const int32_t S = in->s->n * WM_Q;
@@ -795,12 +792,19 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
 
     if (nins == 0)
         goto cleanup;
-    *newhot = malloc(nins * sizeof **newhot);
+    *newhot = malloc(9 * nins * sizeof **newhot);
     if (!*newhot)
         goto nomem;
+    size_t nh = 0;
     for (size_t i = 0; i < nins; i++)
-        (*newhot)[i] = hot_key(ins[i].p, 0, 0);
-    qsort(*newhot, nins, sizeof **newhot, cmp_u64);
+        for (int dy = -1; dy <= 1; dy++)
+            for (int dx = -1; dx <= 1; dx++)
+                (*newhot)[nh++] = hot_key(ins[i].p, dx, dy);
+    qsort(*newhot, nh, sizeof **newhot, cmp_u64);
+    *nnewhot = 0;
+    for (size_t i = 0; i < nh; i++)
+        if (i == 0 || (*newhot)[i] != (*newhot)[i - 1])
+            (*newhot)[(*nnewhot)++] = (*newhot)[i];
     /* insert the corners in place: new ring starts, then the points moved
      * up from the back */
     qsort(ins, nins, sizeof *ins, cmp_ins);
@@ -1002,13 +1006,13 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     size_t nhot = 0;
     for (int pass = 0; pass < 4; pass++)
     {
-        size_t n = 0;
+        size_t n = 0, nnext = 0;
         uint64_t *next = NULL;
         st = insert_pass(&in, rings, pass ? cand : try0, pass ? ncand : ntry,
-                         pass ? hot : NULL, nhot, &next, &n);
+                         pass ? hot : NULL, nhot, &next, &nnext, &n);
         free(hot);
         hot = next;
-        nhot = n;
+        nhot = nnext;
         if (st != WM_OK)
         {
             free(hot);
