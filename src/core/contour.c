@@ -49,12 +49,13 @@ enum
     EL = 3
 };
 
+/* A segment of a cell, from the crossing on its side `iside` (its in edge)
+ * to the one on `oside` (its out edge). */
 typedef struct
 {
-    uint64_t in_edge, out_edge; /* global cell-edge ids */
     wm_pt in_pt, out_pt;
-    int32_t c, r;         /* its cell */
-    uint8_t iside, oside; /* cell sides of in_edge and out_edge (EB..EL) */
+    int32_t c, r; /* its cell */
+    uint8_t iside, oside;
 } seg;
 
 /* The segments of one tile: segs[s0, s1), its first cell (c0, r0). */
@@ -81,6 +82,32 @@ static uint64_t edge_id(int32_t n, int32_t c, int32_t r, int vertical)
            (uint64_t)vertical;
 }
 
+/* Id of side `side` (EB..EL) of cell (c, r). */
+static uint64_t side_id(int32_t n, int32_t c, int32_t r, int side)
+{
+    switch (side)
+    {
+    case EB:
+        return edge_id(n, c, r, 0);
+    case ER:
+        return edge_id(n, c + 1, r, 1);
+    case ET:
+        return edge_id(n, c, r + 1, 0);
+    default:
+        return edge_id(n, c, r, 1);
+    }
+}
+
+static uint64_t in_id(const state *s, const seg *g)
+{
+    return side_id(s->n, g->c, g->r, g->iside);
+}
+
+static uint64_t out_id(const state *s, const seg *g)
+{
+    return side_id(s->n, g->c, g->r, g->oside);
+}
+
 /* Crossing on the edge from sample a (value va) to sample b (value vb),
  * which differ in class; (x, y) lattice of a; b is one sample to the right
  * (vertical == 0) or above (vertical == 1). */
@@ -97,8 +124,8 @@ static wm_pt crossing(float va, float vb, int32_t x, int32_t y, int vertical)
     return p;
 }
 
-static int push_seg(state *s, uint64_t ie, uint64_t oe, wm_pt ip, wm_pt op,
-                    int32_t c, int32_t r, int iside, int oside)
+static int push_seg(state *s, wm_pt ip, wm_pt op, int32_t c, int32_t r,
+                    int iside, int oside)
 {
     if (s->nsegs == s->cap)
     {
@@ -110,8 +137,6 @@ static int push_seg(state *s, uint64_t ie, uint64_t oe, wm_pt ip, wm_pt op,
         s->cap = nc;
     }
     seg *g = &s->segs[s->nsegs++];
-    g->in_edge = ie;
-    g->out_edge = oe;
     g->in_pt = ip;
     g->out_pt = op;
     g->c = c;
@@ -128,16 +153,10 @@ static int cell(state *s, int32_t c, int32_t r, const float *p)
 {
     const float v[4] = {p[0], p[1], p[WM_TILE + 2], p[WM_TILE + 1]};
     const int w[4] = {v[0] <= 0, v[1] <= 0, v[2] <= 0, v[3] <= 0};
-    const int32_t n = s->n;
-    /* per edge, CCW from corner k to k+1: id, crossing, out/in */
-    uint64_t id[4];
+    /* per edge, CCW from corner k to k+1: crossing, out/in */
     wm_pt pt[4];
     int kind[4]; /* 0 none, 1 out (water->land), 2 in */
     const int32_t X = c * WM_Q, Y = r * WM_Q;
-    id[EB] = edge_id(n, c, r, 0);
-    id[ER] = edge_id(n, c + 1, r, 1);
-    id[ET] = edge_id(n, c, r + 1, 0);
-    id[EL] = edge_id(n, c, r, 1);
     for (int k = 0; k < 4; k++)
         kind[k] = w[k] == w[(k + 1) & 3] ? 0 : (w[k] ? 1 : 2);
     /* crossings always interpolated from the edge's lower sample */
@@ -173,7 +192,7 @@ static int cell(state *s, int32_t c, int32_t r, const float *p)
             while (kind[m] != 2)
                 m = (m + 3) & 3;
         }
-        if (!push_seg(s, id[k], id[m], pt[k], pt[m], c, r, k, m))
+        if (!push_seg(s, pt[k], pt[m], c, r, k, m))
             return 0;
     }
     return 1;
@@ -317,7 +336,7 @@ static size_t link_tiles(const state *s, size_t *next, uint8_t *haspred,
             {
                 if (s->segs[j].c != c || s->segs[j].r != r)
                     break;
-                if (s->segs[j].in_edge == g->out_edge)
+                if (s->segs[j].iside == ((g->oside + 2) & 3)) /* across */
                 {
                     next[i] = j;
                     haspred[j] = 1;
@@ -406,7 +425,7 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
         const size_t i = bnd[b];
         if (!crosses_tile(&s, i, 1))
             continue;
-        size_t h = hash64(s.segs[i].in_edge, hcap - 1);
+        size_t h = hash64(in_id(&s, &s.segs[i]), hcap - 1);
         while (slot[h] != SIZE_MAX)
             h = (h + 1) & (hcap - 1);
         slot[h] = i;
@@ -416,10 +435,11 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
         const size_t i = bnd[b];
         if (!crosses_tile(&s, i, 0))
             continue;
-        size_t h = hash64(s.segs[i].out_edge, hcap - 1);
+        const uint64_t key = out_id(&s, &s.segs[i]);
+        size_t h = hash64(key, hcap - 1);
         while (slot[h] != SIZE_MAX)
         {
-            if (s.segs[slot[h]].in_edge == s.segs[i].out_edge)
+            if (in_id(&s, &s.segs[slot[h]]) == key)
             {
                 next[i] = slot[h];
                 haspred[slot[h]] = 1;
