@@ -451,15 +451,6 @@ static uint64_t parity_row(const work *w, size_t k, int32_t r, int32_t c0)
 
 #define TS1 WM_TS1
 
-/* Vector builds of the per-tile loops: the same IEEE operations (no
- * contraction, no fast-math) in wider lanes, so every clone gives the same
- * bits (invariant 2). */
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define WM_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define WM_CLONES
-#endif
-
 /* The tile loops below run over full tiles: samples beyond the window are
  * computed too (fixed trip counts vectorize) and never read. (X, Y) is the
  * lattice position of tile sample (0, 0). */

@@ -43,7 +43,10 @@
  *
  * Robustness: exact integer predicates only (lattice.h), no epsilon;
  * distances compared as __int128 rationals with a common denominator.
- * Doubles appear only to pick the grid's cell size (a heuristic).
+ * Doubles appear only to pick the grid's cell size (a heuristic) and to
+ * skip, in the farthest-vertex scan, the vertices provably not the
+ * farthest (s_far: its double values are within a relative 2^-52 of the
+ * exact ones, so the exact comparison still decides).
  *
  * References: D. Douglas & T. Peucker, "Algorithms for the reduction of the
  * number of points required to represent a digitized line or its
@@ -90,6 +93,7 @@ typedef struct
     unsigned char *kept;
     uint32_t *nk;    /* next kept vertex (valid for kept vertices) */
     uint32_t *stack; /* DP stack */
+    double *approx;  /* s_far's scratch, one per input vertex */
     size_t *count;   /* kept vertices per ring */
     uint32_t *rep;   /* one kept vertex per ring (never dropped) */
     size_t added;    /* vertices restored by the repairs */
@@ -159,8 +163,46 @@ static wm_i128 s_dnum(wm_pt a, wm_pt b, wm_pt p, int64_t len2)
     return (wm_i128)cross * cross;
 }
 
+/* approx[i] = s_dnum(a, b, P[i]) in double, i = lo .. hi - 1, and returns
+ * their maximum (or -1). Every difference, dot and cross product is exact
+ * in double (coordinates below 2^24, products below 2^50), so the region is
+ * s_dnum's and only the last product rounds: approx = exact (1 + d), |d| <=
+ * 2^-53. */
+WM_CLONES
+static double s_approx(const wm_pt *P, uint32_t lo, uint32_t hi, wm_pt a,
+                       wm_pt b, double *approx)
+{
+    const double ax = a.x, ay = a.y;
+    const double abx = (double)b.x - ax, aby = (double)b.y - ay;
+    const double len2 = abx * abx + aby * aby;
+    const double scale = len2 > 0 ? len2 : 1; /* a point: the distance */
+    for (uint32_t i = lo; i < hi; i++)
+    { /* every branch computed: the selects vectorize */
+        const double apx = P[i].x - ax, apy = P[i].y - ay;
+        const double bpx = apx - abx, bpy = apy - aby;
+        const double dot = abx * apx + aby * apy;
+        const double cross = abx * apy - aby * apx;
+        const double e0 = (apx * apx + apy * apy) * scale;
+        const double e1 = (bpx * bpx + bpy * bpy) * scale;
+        const double mid = dot >= len2 ? e1 : cross * cross;
+        approx[i] = dot <= 0 ? e0 : mid;
+    }
+    double m[4] = {-1, -1, -1, -1}; /* four chains of maxsd */
+    uint32_t i = lo;
+    for (; i + 4 <= hi; i += 4)
+        for (int k = 0; k < 4; k++)
+            m[k] = approx[i + k] > m[k] ? approx[i + k] : m[k];
+    for (; i < hi; i++)
+        m[0] = approx[i] > m[0] ? approx[i] : m[0];
+    m[0] = m[1] > m[0] ? m[1] : m[0];
+    m[2] = m[3] > m[2] ? m[3] : m[2];
+    return m[2] > m[0] ? m[2] : m[0];
+}
+
 /* Farthest vertex strictly between a and b (ring order, cyclic; a == b
- * means the whole ring but a); first one on ties. S_NONE when empty. */
+ * means the whole ring but a); first one on ties. S_NONE when empty. The
+ * approximations pick the few vertices within their rounding (a relative
+ * 2^-52) of the largest: the exact comparison runs over those only. */
 static uint32_t s_far(const simp *sp, uint32_t a, uint32_t b)
 {
     const wm_pt pa = sp->P[a], pb = sp->P[b];
@@ -174,9 +216,18 @@ static uint32_t s_far(const simp *sp, uint32_t a, uint32_t b)
     const uint32_t re = (uint32_t)sp->in->start[r + 1];
     const uint32_t lo[2] = {a + 1, rs},
                    hi[2] = {a < b ? b : re, a < b ? rs : b};
+    double m = -1;
+    for (int k = 0; k < 2; k++)
+    {
+        const double mk = s_approx(sp->P, lo[k], hi[k], pa, pb, sp->approx);
+        m = mk > m ? mk : m;
+    }
+    const double cut = m - m * 0x1p-50;
     for (int k = 0; k < 2; k++)
         for (uint32_t i = lo[k]; i < hi[k]; i++)
         {
+            if (sp->approx[i] < cut)
+                continue;
             const wm_i128 d = s_dnum(pa, pb, sp->P[i], len2);
             if (d > bestd)
             {
@@ -833,13 +884,14 @@ wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
     sp.kept = calloc(n ? n : 1, 1);
     sp.nk = malloc((n ? n : 1) * sizeof *sp.nk);
     sp.stack = malloc((n + 1) * sizeof *sp.stack);
+    sp.approx = malloc((n + 1) * sizeof *sp.approx);
     sp.count = calloc(nr, sizeof *sp.count);
     sp.rep = malloc(nr * sizeof *sp.rep);
     sgn = malloc(nr);
     enc_in = malloc(nr * sizeof *enc_in);
     enc_out = malloc(nr * sizeof *enc_out);
-    if (!sp.ring_of || !sp.kept || !sp.nk || !sp.stack || !sp.count ||
-        !sp.rep || !sgn || !enc_in || !enc_out)
+    if (!sp.ring_of || !sp.kept || !sp.nk || !sp.stack || !sp.approx ||
+        !sp.count || !sp.rep || !sgn || !enc_in || !enc_out)
     {
         st = wm_fail(ctx, WM_ERR_NOMEM, "simplify: out of memory");
         goto cleanup;
@@ -1095,6 +1147,7 @@ cleanup:
     free(sp.kept);
     free(sp.nk);
     free(sp.stack);
+    free(sp.approx);
     free(sp.count);
     free(sp.rep);
     free(sp.work);

@@ -196,6 +196,15 @@ extern "C"
     {
         return r->start[i + 1] - r->start[i];
     }
+/** Vector builds of hot loops: the same IEEE operations (no contraction,
+ *  no fast-math) in wider lanes, so every clone gives the same bits
+ *  (invariant 2). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define WM_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define WM_CLONES
+#endif
+
     /** 128-bit integer for exact products (GCC/Clang extension, named once). */
     __extension__ typedef __int128 wm_i128;
 

@@ -306,11 +306,12 @@ OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
     {
         OGRGeometryH tri = OGR_G_CreateGeometry(wkbPolygon);
         OGRGeometryH ring = OGR_G_CreateGeometry(wkbLinearRing);
+        OGR_G_SetPointCount(ring, 4); /* one allocation */
         for (int k = 0; k <= 3; k++)
         {
             double x, y;
             world(s, r, r->rings.pts[r->tris[3 * t + (size_t)(k % 3)]], &x, &y);
-            OGR_G_AddPoint_2D(ring, x, y);
+            OGR_G_SetPoint_2D(ring, k, x, y);
         }
         OGR_G_AddGeometryDirectly(tri, ring);
         OGR_G_AddGeometryDirectly(g, tri);
