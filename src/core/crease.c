@@ -12,10 +12,11 @@
  *
  * Method, per block:
  *   1. boundary primitives of the inputs in reach: for a river segment its
- *      two offset lines and two end circles, for a lake edge the edge;
+ *      two offset lines and two end circles (a circle two consecutive
+ *      segments share taken once), for a lake edge the edge;
  *   2. their pairwise intersections (primitives bucketed in a grid; pairs
- *      from the same input item skipped), kept when strictly inside the
- *      block;
+ *      from the same input item or with boxes apart skipped), kept when
+ *      strictly inside the block;
  *   3. for each candidate C (lattice-snapped), the nearest ring edge; C is
  *      tried when it is 1/4 .. 16 pixels away (closer: nothing to
  *      recover), on that edge or, failing that, on a neighbouring one (a
@@ -52,8 +53,11 @@ typedef struct
 {
     double x0, y0, x1, y1; /* segment, or circle centre (x0,y0) radius x1 */
     int circle;
-    uint32_t item;
+    uint32_t item; /* its input item, or NO_ITEM: a circle two consecutive
+                      segments share */
 } prim;
+
+#define NO_ITEM UINT32_MAX
 
 static uint64_t ckey(int64_t cx, int64_t cy)
 {
@@ -163,6 +167,13 @@ static int intersect(const prim *a, const prim *b, dpt *out)
     if (a->circle && b->circle)
         return circle_circle(a, b, out);
     return a->circle ? seg_circle(b, a, out) : seg_circle(a, b, out);
+}
+
+/* llround of a positive x (the hits lie inside the block), exactly. */
+static int32_t round_pos(double x)
+{
+    const int32_t r = (int32_t)x; /* truncation: floor for x >= 0 */
+    return r + (x - r >= 0.5);    /* x - r is exact */
 }
 
 static void prim_box(const prim *p, double *b)
@@ -843,7 +854,8 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     wm_status st = WM_OK;
     prim *pr = NULL;
     size_t npr = 0, prcap = 0;
-    wm_cells pg; /* primitives by cell */
+    wm_cells pg;       /* primitives by cell */
+    double *pb = NULL; /* their boxes */
     memset(&pg, 0, sizeof pg);
     wm_pt *cand = NULL, *try0 = NULL;
     size_t ncand = 0, candcap = 0;
@@ -884,8 +896,17 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
             p[np++] =
                 (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, in.segs[i]};
         }
-        p[np++] = (prim){ax, ay, q->r, 0, 1, in.segs[i]};
-        p[np++] = (prim){bx2, by2, q->r, 0, 1, in.segs[i]};
+        /* end circles, each once: the start circle of a segment that
+         * continues the previous one (same vertex, same radius) is that
+         * one's end circle, which then belongs to neither (it pairs with
+         * the primitives of both, as the two copies did) */
+        const wm_river_seg *prev = i > 0 ? &s->segs[in.segs[i - 1]] : NULL;
+        if (prev && prev->bx == q->ax && prev->by == q->ay && prev->r == q->r)
+            pr[npr - 1].item = NO_ITEM;
+        else
+            p[np++] = (prim){ax, ay, q->r, 0, 1, in.segs[i]};
+        if (l > 0)
+            p[np++] = (prim){bx2, by2, q->r, 0, 1, in.segs[i]};
         for (int k = 0; k < np; k++)
             if (!push((void **)&pr, &npr, &prcap, &p[k], sizeof *p))
                 goto nomem;
@@ -919,14 +940,17 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     const int64_t cmin = (int64_t)floor(lo / PC);
     const int64_t cside = (int64_t)floor(hi / PC) - cmin + 1;
     wm_cells_reset(&pg, (int32_t)cside);
+    pb = malloc((4 * npr + 1) * sizeof *pb);
+    if (!pb)
+        goto nomem;
     for (size_t i = 0; i < npr; i++)
     {
+        prim_box(&pr[i], pb + 4 * i);
         double b[4];
-        prim_box(&pr[i], b);
-        b[0] = fmax(b[0], lo);
-        b[1] = fmax(b[1], lo);
-        b[2] = fmin(b[2], hi);
-        b[3] = fmin(b[3], hi);
+        b[0] = fmax(pb[4 * i], lo);
+        b[1] = fmax(pb[4 * i + 1], lo);
+        b[2] = fmin(pb[4 * i + 2], hi);
+        b[3] = fmin(pb[4 * i + 3], hi);
         if (b[0] > b[2] || b[1] > b[3])
             continue;
         const int32_t x0 = (int32_t)((int64_t)floor(b[0] / PC) - cmin);
@@ -949,7 +973,13 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
                 for (size_t j = i + 1; j < z; j++)
                 {
                     const prim *p = &pr[pg.item[i]], *q = &pr[pg.item[j]];
-                    if (p->item == q->item)
+                    if (p->item == q->item && p->item != NO_ITEM)
+                        continue;
+                    /* boxes apart by more than any rounding: no hit */
+                    const double *bp = pb + 4 * pg.item[i],
+                                 *bq = pb + 4 * pg.item[j];
+                    if (bp[0] > bq[2] + 4 || bq[0] > bp[2] + 4 ||
+                        bp[1] > bq[3] + 4 || bq[1] > bp[3] + 4)
                         continue;
                     dpt hit[2];
                     const int nh = intersect(p, q, hit);
@@ -961,8 +991,8 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
                         if (!(hit[h].x >= WM_Q && hit[h].x <= S - WM_Q &&
                               hit[h].y >= WM_Q && hit[h].y <= S - WM_Q))
                             continue; /* keep a pixel off the block square */
-                        const wm_pt c = {(int32_t)llround(hit[h].x),
-                                         (int32_t)llround(hit[h].y)};
+                        const wm_pt c = {round_pos(hit[h].x),
+                                         round_pos(hit[h].y)};
                         /* the field is 1-Lipschitz: a point of the boundary is
                          * within 0.71 px of a sample valued within 0.71 px of
                          * 0; anything else is buried under another input */
@@ -1030,6 +1060,7 @@ cleanup:
     free(in.wide);
     free(pr);
     wm_cells_free(&pg);
+    free(pb);
     free(try0);
     free(cand);
     return st;
