@@ -153,7 +153,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     r.s = s;
     r.blocks = blocks;
     r.nblocks = nblocks;
-    r.window = 2 * (size_t)nthreads + 1;
+    r.window = 4 * (size_t)nthreads + 1; /* slack behind a slow block */
     r.opts.simplify = s->params.simplify / s->unit;
     r.opts.triangulate = 1;
     r.opts.method = s->params.method;
