@@ -869,7 +869,7 @@ static void store_tile(work *w, size_t t, float *val, float **dst)
     const int32_t nx = (c0 + WM_TILE < f->w - 1 ? WM_TILE : f->w - 1 - c0) + 1;
     const int32_t ny = (r0 + WM_TILE < f->h - 1 ? WM_TILE : f->h - 1 - r0) + 1;
     int all_land = 1, all_water = 1;
-    for (int32_t j = 0; j < ny; j++)
+    for (int32_t j = 0; j < ny && (all_land || all_water); j++)
         for (int32_t q = 0; q < nx; q++)
         {
             const float d = val[j * TS1 + q];
