@@ -65,8 +65,9 @@ def test_capi_lakes_only(simple_scene):
 
 def test_cli_interrupted_leaves_nothing(wm, tmp_dir):
     dst = os.path.join(tmp_dir, 'interrupted.gpkg')
+    # a run of several seconds (0.1 m pixels: about 7 s on one thread here)
     args = [conftest.CLI_PATH, '-rivers', ANDORRA, '-rivers_layer', 'rivers', '-lakes', ANDORRA,
-            '-lakes_layer', 'lakes', '-pixel_size', '0.25', '-num_threads', '1', dst]
+            '-lakes_layer', 'lakes', '-pixel_size', '0.1', '-num_threads', '1', dst]
     proc = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             universal_newlines=True)
     time.sleep(1.5)

@@ -23,18 +23,15 @@
  * never on another ring (rings are disjoint), so the perturbation changes no
  * containment.
  *
- * Acceleration: the non-horizontal edges are registered in a uniform grid
- * (CSR, square cells of a power-of-two side, one cell per one to four
- * edges) in every cell their segment passes through (row by row, exact
- * integer bounds, a superset of the cells). A query walks the cells of q's row
- * from q's column leftwards and stops as soon as the best crossing lies in the
- * cell just scanned. Building is O(n + total registrations); a query costs the
- * edges of the cells it visits: about O(n) overall for typical rings (many
- * short edges, rings spread over the block), no rings^2 term. Adversarial
- * layouts (many rays crossing long runs of crowded cells) cost more, up to
- * O(rings * n / cells); extraction output is not like that.
+ * Acceleration: the queries sorted by y, and a bitmap of the lattice rows
+ * holding one. Every non-horizontal edge looks up the rows of its y range
+ * [min y, max y) in the bitmap (a few words for a contour edge) and, only
+ * when one holds a query, offers itself to those queries (binary search
+ * into the sorted ones). One pass over the edges, no per-edge allocation,
+ * no grid; an edge meets only the queries whose ray it crosses.
  *
- * Complexity: O(n) memory; time O(n + sum over queries of scanned cells).
+ * Complexity: O(n + rings log rings + (ymax - ymin) / 64 + edge-query
+ * crossings) time, O(rings + (ymax - ymin) / 64) memory besides the input.
  *
  * References: the half-open crossing rule of the even-odd test (E. Haines,
  * "Point in Polygon Strategies", Graphics Gems IV, 1994); symbolic
@@ -44,307 +41,164 @@
 #include "holes.h"
 #include "lattice.h"
 
-#include <math.h>
 #include <stdlib.h>
 
-#define H_NONE UINT32_MAX
-
-/* ---- row-by-row cell walk of a segment ----------------------------------- */
-
+/* A query: ring r's lowest-leftmost vertex (x, y), and the edge its ray
+ * first meets so far: crossing at x = N / D, slope dx / D, on ring S, going
+ * up or down. */
 typedef struct
 {
-    int64_t ax, ay, bx, by; /* endpoints, a has the lower (or equal) y */
-    int64_t ox, oy, s;      /* grid origin and cell size (1 << k) */
-    int k;
-    int64_t colmin, colmax; /* columns of the segment's bounding box */
-    int64_t row0, row, row_end, col, col_end;
-} h_walk;
+    int32_t x, y;
+    uint32_t r, S;
+    int found, upward;
+    int64_t N, D, dx;
+} h_query;
 
-static int64_t h_floordiv(int64_t a, int64_t b)
+static int cmp_query(const void *a, const void *b)
 {
-    int64_t q = a / b;
-    if ((a % b != 0) && ((a < 0) != (b < 0)))
-        q--;
-    return q;
+    const h_query *p = a, *q = b;
+    if (p->y != q->y)
+        return p->y < q->y ? -1 : 1;
+    return (p->r > q->r) - (p->r < q->r);
 }
 
-static int64_t h_ceildiv(int64_t a, int64_t b)
+/* Whether a bit of w[a .. b] (bit indices, a <= b) is set. */
+static int h_any(const uint64_t *w, int64_t a, int64_t b)
 {
-    return -h_floordiv(-a, b);
+    const int64_t wa = a >> 6, wb = b >> 6;
+    const uint64_t ma = ~UINT64_C(0) << (a & 63);
+    const uint64_t mb = ~UINT64_C(0) >> (63 - (b & 63));
+    if (wa == wb)
+        return (w[wa] & ma & mb) != 0;
+    if (w[wa] & ma)
+        return 1;
+    for (int64_t k = wa + 1; k < wb; k++)
+        if (w[k])
+            return 1;
+    return (w[wb] & mb) != 0;
 }
 
-static void h_walk_row(h_walk *w)
+/* Offers edge lo -> hi (lo.y <= q.y < hi.y, ring S, going up or not) to
+ * query q: kept when it crosses the ray strictly left of q and right of
+ * the best so far (a tie, two edges through one point, goes to the larger
+ * dx / dy: it is further right at q.y + eps). */
+static void h_offer(h_query *q, wm_pt lo, wm_pt hi, uint32_t S, int upward)
 {
-    if (w->colmin == w->colmax || w->row_end == w->row0)
+    const int64_t D = (int64_t)hi.y - lo.y, dx = (int64_t)hi.x - lo.x;
+    const int64_t N = (int64_t)lo.x * D + dx * ((int64_t)q->y - lo.y);
+    if (N >= (int64_t)q->x * D)
+        return; /* not strictly left of q */
+    if (q->found)
     {
-        /* one column, or one row holding the whole segment */
-        w->col = w->colmin;
-        w->col_end = w->colmax;
-        return;
+        const wm_i128 l = (wm_i128)N * q->D, rr = (wm_i128)q->N * D;
+        if (l < rr || (l == rr && dx * q->D <= q->dx * D))
+            return;
     }
-    /* the part of the segment with y in the row's closed y range; its x
-     * range, rounded outwards, exactly (dy > 0 here) */
-    int64_t ylo = w->oy + w->row * w->s, yhi = ylo + w->s;
-    if (ylo < w->ay)
-        ylo = w->ay;
-    if (yhi > w->by)
-        yhi = w->by;
-    const int64_t dx = w->bx - w->ax, dy = w->by - w->ay;
-    const int64_t na = dx * (ylo - w->ay), nb = dx * (yhi - w->ay);
-    const int64_t lo = w->ax + h_floordiv(na < nb ? na : nb, dy);
-    const int64_t hi = w->ax + h_ceildiv(na > nb ? na : nb, dy);
-    w->col = (lo - w->ox) >> w->k; /* lo, hi >= ox */
-    w->col_end = (hi - w->ox) >> w->k;
-    if (w->col < w->colmin)
-        w->col = w->colmin;
-    if (w->col_end > w->colmax)
-        w->col_end = w->colmax;
-}
-
-/* The cells of segment ab in the grid of cells of side 1 << k from
- * (ox, oy), both ends at or above and right of it. */
-static void h_walk_init(h_walk *w, wm_pt a, wm_pt b, int64_t ox, int64_t oy,
-                        int k)
-{
-    if (b.y < a.y)
-    {
-        const wm_pt t = a;
-        a = b;
-        b = t;
-    }
-    w->ax = a.x;
-    w->ay = a.y;
-    w->bx = b.x;
-    w->by = b.y;
-    w->ox = ox;
-    w->oy = oy;
-    w->s = (int64_t)1 << k;
-    w->k = k;
-    w->colmin = ((int64_t)(a.x < b.x ? a.x : b.x) - ox) >> k;
-    w->colmax = ((int64_t)(a.x > b.x ? a.x : b.x) - ox) >> k;
-    w->row = ((int64_t)a.y - oy) >> k;
-    w->row_end = ((int64_t)b.y - oy) >> k;
-    w->row0 = w->row;
-    h_walk_row(w);
-}
-
-/* Next cell (cx, cy) of the walk; 0 when done. */
-static int h_walk_next(h_walk *w, int64_t *cx, int64_t *cy)
-{
-    while (w->col > w->col_end)
-    {
-        if (++w->row > w->row_end)
-            return 0;
-        h_walk_row(w);
-    }
-    *cx = w->col++;
-    *cy = w->row;
-    return 1;
-}
-
-/* ---- the nesting --------------------------------------------------------- */
-
-static size_t h_next(const wm_rings *rs, const uint32_t *ring_of, size_t i)
-{
-    const size_t r = ring_of[i];
-    return (i + 1 == rs->start[r + 1]) ? rs->start[r] : i + 1;
+    q->found = 1;
+    q->N = N;
+    q->D = D;
+    q->dx = dx;
+    q->S = S;
+    q->upward = upward;
 }
 
 wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
                            const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
-    const size_t nr = rings->nrings, n = rings->npts;
+    const size_t nr = rings->nrings;
     const wm_pt *P = rings->pts;
-    uint32_t *ring_of = NULL, *ent = NULL, *qidx = NULL, *stack = NULL;
-    size_t *cell = NULL;
+    h_query *qs = NULL;
+    uint64_t *rows = NULL;
+    uint32_t *stack = NULL;
     int32_t *hit = NULL;
     unsigned char *inside = NULL, *ccw = NULL, *state = NULL;
-    size_t nedges = 0, ncells = 0, nent = 0;
-    int64_t xmin = INT64_MAX, ymin = INT64_MAX, xmax = INT64_MIN,
-            ymax = INT64_MIN, s = 1, cols = 1, rows = 1;
-    int k = 0; /* cell side s = 1 << k */
+    size_t nq = 0;
 
     if (nr == 0)
         return WM_OK;
-    if (nr > (size_t)INT32_MAX || n >= (size_t)UINT32_MAX)
+    if (nr > (size_t)INT32_MAX || rings->npts >= (size_t)UINT32_MAX)
         return wm_fail(ctx, WM_ERR_NOMEM, "holes: too many rings or points");
 
-    ring_of = malloc((n ? n : 1) * sizeof *ring_of);
-    qidx = malloc(nr * sizeof *qidx);
+    qs = malloc(nr * sizeof *qs);
     hit = malloc(nr * sizeof *hit);
     inside = calloc(nr, 1);
     ccw = calloc(nr, 1);
     state = calloc(nr, 1);
     stack = malloc(nr * sizeof *stack);
-    if (!ring_of || !qidx || !hit || !inside || !ccw || !state || !stack)
+    if (!qs || !hit || !inside || !ccw || !state || !stack)
     {
         st = wm_fail(ctx, WM_ERR_NOMEM, "holes: out of memory");
         goto cleanup;
     }
 
-    /* per ring: owner of each point, lowest-leftmost vertex, orientation */
+    /* per ring: lowest-leftmost vertex, orientation */
     for (size_t r = 0; r < nr; r++)
     {
         const size_t b = rings->start[r], e = rings->start[r + 1];
-        qidx[r] = H_NONE;
         hit[r] = -1;
         enclosing[r] = -1;
-        for (size_t i = b; i < e; i++)
-        {
-            ring_of[i] = (uint32_t)r;
-            if (qidx[r] == H_NONE || P[i].y < P[qidx[r]].y ||
-                (P[i].y == P[qidx[r]].y && P[i].x < P[qidx[r]].x))
-                qidx[r] = (uint32_t)i;
-            if (P[i].x < xmin)
-                xmin = P[i].x;
-            if (P[i].x > xmax)
-                xmax = P[i].x;
-            if (P[i].y < ymin)
-                ymin = P[i].y;
-            if (P[i].y > ymax)
-                ymax = P[i].y;
-            if (e - b >= 2)
-            {
-                const size_t j = (i + 1 == e) ? b : i + 1;
-                if (P[i].y != P[j].y)
-                    nedges++;
-            }
-        }
+        if (b == e)
+            continue;
+        size_t m = b;
+        for (size_t i = b + 1; i < e; i++)
+            if (P[i].y < P[m].y || (P[i].y == P[m].y && P[i].x < P[m].x))
+                m = i;
+        const h_query q = {P[m].x, P[m].y, (uint32_t)r, 0, 0, 0, 0, 0, 0};
+        qs[nq++] = q;
         ccw[r] = wm_ring_area2(P + b, e - b) > 0;
     }
-    if (nedges == 0)
-        goto cleanup; /* no ring can enclose anything */
-
-    /* grid: square cells, about one per 4 edges, at most 4 * nedges + 64 */
+    if (nq == 0)
+        goto cleanup;
+    qsort(qs, nq, sizeof *qs, cmp_query);
+    const int64_t y0 = qs[0].y, y1 = qs[nq - 1].y;
+    rows = calloc((size_t)((y1 - y0) >> 6) + 1, sizeof *rows);
+    if (!rows)
     {
-        const double w = (double)(xmax - xmin + 1);
-        const double h = (double)(ymax - ymin + 1);
-        const double want = ceil(sqrt(w * h * 4.0 / (double)nedges));
-        while ((double)((int64_t)1 << k) < want)
-            k++; /* a power of two: cells by shifts */
-        for (;;)
-        {
-            s = (int64_t)1 << k;
-            cols = ((xmax - xmin) >> k) + 1;
-            rows = ((ymax - ymin) >> k) + 1;
-            if ((double)cols * (double)rows <= 4.0 * (double)nedges + 64.0)
-                break;
-            k++;
-        }
-        ncells = (size_t)cols * (size_t)rows;
-    }
-    cell = calloc(ncells + 1, sizeof *cell);
-    if (!cell)
-    {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "holes: out of memory (grid)");
+        st = wm_fail(ctx, WM_ERR_NOMEM, "holes: out of memory (rows)");
         goto cleanup;
     }
-    /* count, prefix, fill (CSR) */
-    for (int pass = 0; pass < 2; pass++)
-    {
-        for (size_t i = 0; i < n; i++)
-        {
-            const size_t j = h_next(rings, ring_of, i);
-            h_walk w;
-            int64_t cx, cy;
-            if (P[i].y == P[j].y)
-                continue;
-            h_walk_init(&w, P[i], P[j], xmin, ymin, k);
-            while (h_walk_next(&w, &cx, &cy))
-            {
-                const size_t c = (size_t)(cy * cols + cx);
-                if (pass == 0)
-                    cell[c]++;
-                else
-                    ent[--cell[c]] = (uint32_t)i;
-            }
-        }
-        if (pass == 0)
-        {
-            for (size_t c = 0; c < ncells; c++)
-            {
-                if (cell[c] > SIZE_MAX / sizeof *ent - nent)
-                {
-                    st = wm_fail(ctx, WM_ERR_NOMEM, "holes: grid too large");
-                    goto cleanup;
-                }
-                nent += cell[c];
-                cell[c] = nent; /* end of cell c; the fill decrements */
-            }
-            cell[ncells] = nent;
-            ent = malloc((nent ? nent : 1) * sizeof *ent);
-            if (!ent)
-            {
-                st = wm_fail(ctx, WM_ERR_NOMEM, "holes: out of memory (cells)");
-                goto cleanup;
-            }
-        }
-    }
+    for (size_t k = 0; k < nq; k++)
+        rows[(qs[k].y - y0) >> 6] |= UINT64_C(1) << ((qs[k].y - y0) & 63);
 
-    /* queries */
+    /* every edge offers itself to the queries whose ray it crosses */
     for (size_t r = 0; r < nr; r++)
     {
-        if (qidx[r] == H_NONE)
-            continue;
-        const wm_pt q = P[qidx[r]];
-        const int64_t row = (q.y - ymin) >> k;
-        int64_t bestN = 0, bestD = 0, bestdx = 0;
-        size_t best = SIZE_MAX;
-        for (int64_t c = (q.x - xmin) >> k; c >= 0; c--)
+        const size_t b = rings->start[r], e = rings->start[r + 1];
+        for (size_t i = b; i < e; i++)
         {
-            const size_t ci = (size_t)(row * cols + c);
-            for (size_t e = cell[ci]; e < cell[ci + 1]; e++)
+            const wm_pt p = P[i], q = P[i + 1 < e ? i + 1 : b];
+            if (p.y == q.y)
+                continue;
+            const int upward = q.y > p.y;
+            const wm_pt lo = upward ? p : q, hi = upward ? q : p;
+            const int64_t a = lo.y > y0 ? lo.y : y0;
+            const int64_t z = (int64_t)hi.y - 1 < y1 ? (int64_t)hi.y - 1 : y1;
+            if (a > z || !h_any(rows, a - y0, z - y0))
+                continue;
+            size_t k0 = 0, k1 = nq; /* the first query at y >= a */
+            while (k0 < k1)
             {
-                const size_t i = ent[e];
-                if (ring_of[i] == r)
-                    continue;
-                const size_t j = h_next(rings, ring_of, i);
-                wm_pt lo = P[i], hi = P[j];
-                if (hi.y < lo.y)
-                {
-                    lo = P[j];
-                    hi = P[i];
-                }
-                if (!(lo.y <= q.y && q.y < hi.y))
-                    continue;
-                const int64_t D = (int64_t)hi.y - lo.y;
-                const int64_t dx = (int64_t)hi.x - lo.x;
-                const int64_t N =
-                    (int64_t)lo.x * D + dx * ((int64_t)q.y - lo.y);
-                if (N >= (int64_t)q.x * D)
-                    continue; /* not strictly left of q */
-                if (best != SIZE_MAX)
-                {
-                    const wm_i128 l = (wm_i128)N * bestD;
-                    const wm_i128 rr = (wm_i128)bestN * D;
-                    if (l < rr)
-                        continue;
-                    /* tie: the larger dx/dy is further right at q.y + eps */
-                    if (l == rr && dx * bestD <= bestdx * D)
-                        continue;
-                }
-                best = i;
-                bestN = N;
-                bestD = D;
-                bestdx = dx;
+                const size_t mid = k0 + (k1 - k0) / 2;
+                if (qs[mid].y < a)
+                    k0 = mid + 1;
+                else
+                    k1 = mid;
             }
-            if (best != SIZE_MAX && bestN >= (xmin + c * s) * bestD)
-                break; /* nothing further left can beat it */
+            for (size_t k = k0; k < nq && qs[k].y <= z; k++)
+                if (qs[k].r != r)
+                    h_offer(&qs[k], lo, hi, (uint32_t)r, upward);
         }
-        if (best == SIZE_MAX)
-            continue; /* hit[r] stays -1 */
+    }
+    for (size_t k = 0; k < nq; k++)
+        if (qs[k].found)
         {
-            const size_t j = h_next(rings, ring_of, best);
-            const int upward = P[j].y > P[best].y;
-            const uint32_t S = ring_of[best];
             /* q is on the +x side of the edge: its right side if the edge
              * goes up, its left side if it goes down; the interior of S is
              * on the left for a CCW ring, on the right for a CW ring. */
-            hit[r] = (int32_t)S;
-            inside[r] = (unsigned char)(upward == !ccw[S]);
+            hit[qs[k].r] = (int32_t)qs[k].S;
+            inside[qs[k].r] = (unsigned char)(qs[k].upward == !ccw[qs[k].S]);
         }
-    }
 
     /* resolve: enc(r) = -1 | hit | enc(hit), iteratively with a memo.
      * state: 0 unknown, 1 on the stack, 2 done. */
@@ -376,11 +230,9 @@ wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
     }
 
 cleanup:
-    free(ring_of);
-    free(ent);
-    free(qidx);
+    free(qs);
+    free(rows);
     free(stack);
-    free(cell);
     free(hit);
     free(inside);
     free(ccw);

@@ -24,9 +24,10 @@ extern "C"
      * Method: for each ring take its lowest-leftmost vertex q; the ring edge
      * first hit by the ray from q towards -x decides (that edge's ring S: if
      * the edge's direction puts q on S's interior side then S encloses the
-     * ring, otherwise S's own enclosing ring does). Edges are bucketed by y so
-     * a query scans one bucket; all comparisons are exact. O(n log n) for n
-     * vertices.
+     * ring, otherwise S's own enclosing ring does). Each edge looks up, in a
+     * bitmap of the queries' rows, whether its y range holds a query, and
+     * offers itself only to those; all comparisons are exact. O(n + rings log
+     * rings + height / 64 + crossings) for n vertices.
      *
      * @param rings     the rings (borrowed)
      * @param enclosing out: rings->nrings entries, allocated by the caller
