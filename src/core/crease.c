@@ -15,8 +15,8 @@
  *      two offset lines and two end circles (a circle two consecutive
  *      segments share taken once), for a lake edge the edge;
  *   2. their pairwise intersections (primitives bucketed in a grid; pairs
- *      from the same input item or with boxes apart skipped), kept when
- *      strictly inside the block;
+ *      from the same input item, or with a circle and boxes apart, skipped),
+ *      kept when strictly inside the block;
  *   3. for each candidate C (lattice-snapped), the nearest ring edge; C is
  *      tried when it is 1/4 .. 16 pixels away (closer: nothing to
  *      recover), on that edge or, failing that, on a neighbouring one (a
@@ -931,8 +931,8 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
                 goto nomem;
         }
     }
-    if (npr > UINT32_MAX)
-        goto cleanup;
+    if (npr >= NO_ITEM || s->nsegs + s->nedges >= NO_ITEM)
+        goto cleanup; /* items and primitives need 32 bits */
 
     /* 2. candidates: pairs sharing a grid cell (cells over the block grown
      * by 4 px), found once (in the cell holding the intersection) */
@@ -975,11 +975,15 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
                     const prim *p = &pr[pg.item[i]], *q = &pr[pg.item[j]];
                     if (p->item == q->item && p->item != NO_ITEM)
                         continue;
-                    /* boxes apart by more than any rounding: no hit */
+                    /* with a circle, boxes apart by more than any rounding
+                     * give no hit; two nearly parallel lines may (their
+                     * crossing is noise, far off), and are kept as they
+                     * were */
                     const double *bp = pb + 4 * pg.item[i],
                                  *bq = pb + 4 * pg.item[j];
-                    if (bp[0] > bq[2] + 4 || bq[0] > bp[2] + 4 ||
-                        bp[1] > bq[3] + 4 || bq[1] > bp[3] + 4)
+                    if ((p->circle || q->circle) &&
+                        (bp[0] > bq[2] + 4 || bq[0] > bp[2] + 4 ||
+                         bp[1] > bq[3] + 4 || bq[1] > bp[3] + 4))
                         continue;
                     dpt hit[2];
                     const int nh = intersect(p, q, hit);

@@ -81,7 +81,8 @@ static int h_any(const uint64_t *w, int64_t a, int64_t b)
 /* Offers edge lo -> hi (lo.y <= q.y < hi.y, ring S, going up or not) to
  * query q: kept when it crosses the ray strictly left of q and right of
  * the best so far (a tie, two edges through one point, goes to the larger
- * dx / dy: it is further right at q.y + eps). */
+ * dx / dy: it is further right at q.y + eps; equal slopes too means
+ * overlapping edges, invalid rings, where the first edge offered stays). */
 static void h_offer(h_query *q, wm_pt lo, wm_pt hi, uint32_t S, int upward)
 {
     const int64_t D = (int64_t)hi.y - lo.y, dx = (int64_t)hi.x - lo.x;
