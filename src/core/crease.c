@@ -371,8 +371,8 @@ static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
 typedef struct
 {
     const wm_rings *r;
-    int32_t side;      /* cells per side */
-    wm_cells cells;    /* edge k = from vertex k to its successor */
+    wm_cells cells;    /* edge k = from vertex k to its successor; its
+                          side is the grid's */
     uint32_t *ring_of; /* vertex -> ring */
     uint8_t *active;   /* side*side, or NULL: every cell registered (owned) */
 } ringgrid;
@@ -394,7 +394,7 @@ static int32_t cell_of(const ringgrid *g, int32_t v)
     if (v < 0)
         return 0;
     const int32_t c = v / RCELL; /* v >= 0: a shift */
-    return c >= g->side ? g->side - 1 : c;
+    return c >= g->cells.side ? g->cells.side - 1 : c;
 }
 
 /* Whether a cell of [x0, x1] x [y0, y1] (lattice box) is registered. */
@@ -407,7 +407,7 @@ static int box_active(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
     const int32_t cy0 = cell_of(g, y0), cy1 = cell_of(g, y1);
     for (int32_t cy = cy0; cy <= cy1; cy++)
         for (int32_t cx = cx0; cx <= cx1; cx++)
-            if (g->active[(size_t)cy * (size_t)g->side + (size_t)cx])
+            if (g->active[(size_t)cy * (size_t)g->cells.side + (size_t)cx])
                 return 1;
     return 0;
 }
@@ -429,7 +429,7 @@ static void edge_cells(const ringgrid *g, wm_pt a, wm_pt b, int32_t *cb)
 static wm_status fill_ringgrid(ringgrid *g)
 {
     const wm_rings *r = g->r;
-    wm_cells_reset(&g->cells, g->side);
+    wm_cells_reset(&g->cells, g->cells.side); /* the grid's side stays */
     for (size_t ri = 0; ri < r->nrings; ri++)
     {
         const size_t b0 = r->start[ri], e = r->start[ri + 1];
@@ -458,7 +458,7 @@ static wm_status fill_ringgrid(ringgrid *g)
                 for (int32_t cy = cb[1]; cy <= cb[3]; cy++)
                     for (int32_t cx = cb[0]; cx <= cb[2]; cx++)
                         if ((!g->active ||
-                             g->active[(size_t)cy * (size_t)g->side +
+                             g->active[(size_t)cy * (size_t)g->cells.side +
                                        (size_t)cx]) &&
                             !wm_cells_add(&g->cells, cx, cy, (uint32_t)k))
                             return WM_ERR_NOMEM;
@@ -474,7 +474,7 @@ static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S,
                                 uint8_t *active)
 {
     g->r = r;
-    g->side = S / RCELL + 1;
+    wm_cells_reset(&g->cells, S / RCELL + 1);
     g->active = active;
     g->ring_of = malloc((r->npts + 1) * sizeof *g->ring_of);
     if (!g->ring_of || r->npts >= UINT32_MAX)
@@ -503,7 +503,7 @@ static int visit_edges(ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
     const int32_t cy0 = cell_of(g, y0), cy1 = cell_of(g, y1);
     for (int32_t cy = cy0; g->active && cy <= cy1; cy++)
         for (int32_t cx = cx0; cx <= cx1; cx++)
-            if (!g->active[(size_t)cy * (size_t)g->side + (size_t)cx])
+            if (!g->active[(size_t)cy * (size_t)g->cells.side + (size_t)cx])
             {
                 free(g->active);
                 g->active = NULL;

@@ -492,6 +492,12 @@ static inline int32_t sb_of(int32_t i)
     return i / SB < NSB ? i / SB : NSB - 1;
 }
 
+/* Last sample of sub-block b along an axis (its first is b * SB). */
+static inline int32_t sb_last(int32_t b)
+{
+    return b < NSB - 1 ? b * SB + SB - 1 : WM_TILE;
+}
+
 /* The samples of a tile a batch evaluates: per row of sub-blocks, the
  * columns lo .. hi (lo > hi: none) spanning its active blocks. */
 typedef struct
@@ -581,13 +587,12 @@ static void lake_min(const double *du2, const uint64_t *mask, double *v,
 /* Centre and half-extent, in samples, of sub-block b along an axis. */
 static inline double sb_centre(int32_t b)
 {
-    return b < NSB - 1 ? b * SB + (SB - 1) / 2.0
-                       : ((NSB - 1) * SB + WM_TILE) / 2.0;
+    return (b * SB + sb_last(b)) / 2.0;
 }
 
 static inline double sb_half(int32_t b)
 {
-    return b < NSB - 1 ? (SB - 1) / 2.0 : (WM_TILE - (NSB - 1) * SB) / 2.0;
+    return (sb_last(b) - b * SB) / 2.0;
 }
 
 /* d2 = squared distances from the sub-block centres of a tile (sample
@@ -680,10 +685,8 @@ static void narrow_band(const wm_field_batch *bt, size_t k, int64_t X,
     for (int32_t b = 0; b < NSB; b++)
         for (int32_t a = 0; a < NSB; a++)
             if (deep[b * NSB + a])
-                for (int32_t j = b * SB;
-                     j <= (b == NSB - 1 ? WM_TILE : b * SB + SB - 1); j++)
-                    for (int32_t i = a * SB;
-                         i <= (a == NSB - 1 ? WM_TILE : a * SB + SB - 1); i++)
+                for (int32_t j = b * SB; j <= sb_last(b); j++)
+                    for (int32_t i = a * SB; i <= sb_last(a); i++)
                         v[j * TS1 + i] = -bandl;
     for (int32_t b = 0; b < NSB; b++)
     {
@@ -693,7 +696,7 @@ static void narrow_band(const wm_field_batch *bt, size_t k, int64_t X,
             if (!deep[b * NSB + a] && !far[b * NSB + a])
             {
                 sp->lo[b] = sp->lo[b] < a * SB ? sp->lo[b] : a * SB;
-                sp->hi[b] = a == NSB - 1 ? WM_TILE : a * SB + SB - 1;
+                sp->hi[b] = sb_last(a);
             }
     }
 }

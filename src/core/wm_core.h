@@ -196,6 +196,7 @@ extern "C"
     {
         return r->start[i + 1] - r->start[i];
     }
+
 /** Vector builds of hot loops: the same IEEE operations (no contraction,
  *  no fast-math) in wider lanes, so every clone gives the same bits
  *  (invariant 2). */
