@@ -71,6 +71,27 @@ typedef struct
                    order of seg is the order along the rings) */
 } insertion;
 
+/* What the passes know of a candidate corner. A pass tries the open ones
+ * (a later pass: those near a corner the previous one inserted). One found
+ * within a quarter pixel of a ring edge has nothing to recover while that
+ * edge stands: passes only split edges, so it is tried again only once its
+ * witness edge is split (and the nearest edge search would skip it until
+ * then). An inserted corner, or one off the union's boundary (which depends
+ * on the inputs only), is settled. */
+enum
+{
+    C_OPEN,
+    C_CLOSE,
+    C_DONE
+};
+
+typedef struct
+{
+    wm_pt c;
+    wm_pt e0, e1; /* C_CLOSE: the witness edge */
+    int state;
+} corner;
+
 static int cmp_pt(const void *a, const void *b)
 {
     const wm_pt *x = a, *y = b;
@@ -97,6 +118,15 @@ static int push(void **buf, size_t *n, size_t *cap, const void *item,
 }
 
 /* ---- candidate corners: intersections of primitives ------------------- */
+
+/* How many scattered field reads ahead a loop prefetches. */
+#define PREFETCH 8
+
+/* The sample nearest to lattice coordinate v >= 0. */
+static int32_t sample_of(int32_t v)
+{
+    return (v + WM_Q / 2) / WM_Q;
+}
 
 typedef struct
 {
@@ -696,66 +726,88 @@ static void mark_cells(uint8_t *a, int32_t side, int32_t x0, int32_t y0,
                    (size_t)(x1 - x0 + 1));
 }
 
-/* The ring grid cells a pass needs (owned by the caller). The first pass
- * tries `cand`; a later one the candidates in the cells of `hot`. Searches
- * reach WM_CREASE_REACH (one cell) around a candidate and the edges it may
- * split a little farther: two cells of margin cover that (a query beyond them
- * completes the grid). NULL when out of memory. */
-static uint8_t *pass_cells(const wm_pt *cand, size_t ncand, const uint64_t *hot,
-                           size_t nhot, int32_t S)
+/* The ring grid cells a pass needs (owned by the caller): around the
+ * corners cs[todo[0 .. ntodo)] it tries. Searches reach WM_CREASE_REACH
+ * (one cell) around a candidate and the edges it may split a little
+ * farther: two cells of margin cover that (a query beyond them completes
+ * the grid). NULL when out of memory. */
+static uint8_t *pass_cells(const corner *cs, const size_t *todo, size_t ntodo,
+                           int32_t S)
 {
-    const int32_t side = S / RCELL + 1, per = HOT_CELL / RCELL;
+    const int32_t side = S / RCELL + 1;
     uint8_t *a = calloc((size_t)side * (size_t)side, 1);
     if (!a)
         return NULL;
-    for (size_t i = 0; !hot && i < ncand; i++)
+    for (size_t i = 0; i < ntodo; i++)
     {
-        const int32_t cx = cand[i].x / RCELL, cy = cand[i].y / RCELL;
+        const wm_pt c = cs[todo[i]].c;
+        const int32_t cx = c.x / RCELL, cy = c.y / RCELL;
         mark_cells(a, side, cx - 2, cy - 2, cx + 2, cy + 2);
-    }
-    for (size_t i = 0; i < nhot; i++)
-    {
-        const int32_t hx = (int32_t)(uint32_t)(hot[i] & 0xffffffffu);
-        const int32_t hy = (int32_t)(uint32_t)(hot[i] >> 32);
-        mark_cells(a, side, hx * per - 2, hy * per - 2, (hx + 1) * per + 1,
-                   (hy + 1) * per + 1);
     }
     return a;
 }
 
-/* One pass: tries the candidates against the current rings and rebuilds
- * them with the accepted corners; *ninserted says how many. With hot
- * (sorted keys of the hot cells next to the corners the previous pass
- * inserted), only the candidates in those are tried; *newhot receives this
- * pass's (*nnewhot keys, caller frees). */
-static wm_status insert_pass(const inputs *in, wm_rings *rings,
-                             const wm_pt *cand, size_t ncand,
-                             const uint64_t *hot, size_t nhot,
+/* An edge as a key: its ends, the lower first. */
+typedef struct
+{
+    wm_pt lo, hi;
+} edge_key;
+
+static edge_key make_key(wm_pt a, wm_pt b)
+{
+    const int a_first = cmp_pt(&a, &b) < 0;
+    const edge_key k = {a_first ? a : b, a_first ? b : a};
+    return k;
+}
+
+static int cmp_key(const void *a, const void *b)
+{
+    const edge_key *x = a, *y = b;
+    const int c = cmp_pt(&x->lo, &y->lo);
+    return c ? c : cmp_pt(&x->hi, &y->hi);
+}
+
+/* One pass: tries the open corners against the current rings (with hot,
+ * the sorted keys of the hot cells next to the corners the previous pass
+ * inserted, only those in them), updates their states and rebuilds the
+ * rings with the accepted corners; *ninserted says how many. *newhot
+ * receives this pass's hot cells (*nnewhot keys, caller frees). */
+static wm_status insert_pass(const inputs *in, wm_rings *rings, corner *cs,
+                             size_t ncs, const uint64_t *hot, size_t nhot,
                              uint64_t **newhot, size_t *nnewhot,
                              size_t *ninserted)
 {
     wm_status st = WM_OK;
     const int32_t S = in->s->n * WM_Q;
     insertion *ins = NULL;
-    size_t nins = 0, inscap = 0;
-    uint8_t *split = NULL;
+    size_t nins = 0, inscap = 0, ntodo = 0;
+    uint8_t *split = NULL, *active = NULL;
+    edge_key *cut = NULL;
     ringgrid g;
     memset(&g, 0, sizeof g);
     *ninserted = 0;
-    uint8_t *active = pass_cells(cand, ncand, hot, nhot, S);
+    size_t *todo = malloc((ncs + 1) * sizeof *todo);
+    if (!todo)
+        goto nomem;
+    for (size_t i = 0; i < ncs; i++)
+        if (cs[i].state == C_OPEN && (!hot || near_hot(hot, nhot, cs[i].c)))
+            todo[ntodo++] = i;
+    if (ntodo == 0)
+        goto cleanup;
+    active = pass_cells(cs, todo, ntodo, S);
     if (!active)
         goto nomem;
     st = build_ringgrid(&g, rings, S, active);
+    active = NULL; /* the grid's */
     if (st != WM_OK)
         goto nomem;
     split = calloc(rings->npts + 1, 1);
     if (!split)
         goto nomem;
-    for (size_t i = 0; i < ncand; i++)
+    for (size_t q = 0; q < ntodo; q++)
     {
-        const wm_pt c = cand[i];
-        if (hot && !near_hot(hot, nhot, c))
-            continue;
+        corner *cd = &cs[todo[q]];
+        const wm_pt c = cd->c;
         /* nearest edge: a small search first (most corners are already
          * within a quarter pixel), then up to WM_CREASE_REACH */
         nearest nr = {&g, c.x, c.y, INFINITY, SIZE_MAX};
@@ -764,7 +816,12 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
                         &nr) < 0)
             goto nomem;
         if (nr.best <= WM_Q / 4.0)
+        {
+            cd->state = C_CLOSE;
+            cd->e0 = rings->pts[nr.edge];
+            cd->e1 = rings->pts[succ(rings, g.ring_of, nr.edge)];
             continue;
+        }
         if (nr.best > R)
         {
             R = WM_CREASE_REACH;
@@ -776,7 +833,10 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
             continue;
         /* a corner of the union, not one buried under another input */
         if (fabs(union_distance(in, c.x, c.y, 4.0 * WM_Q)) > 1.0)
+        {
+            cd->state = C_DONE;
             continue;
+        }
         /* the nearest edge, else one of its neighbours (a truncated tip
          * ends in a vertex: either edge at it may be the one to split) */
         const size_t tries[3] = {nr.edge, succ(rings, g.ring_of, nr.edge),
@@ -796,6 +856,7 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
         const insertion x = {c, ka};
         if (!push((void **)&ins, &nins, &inscap, &x, sizeof x))
             goto nomem;
+        cd->state = C_DONE;
         split[ka] = 1;
         split[pred(rings, g.ring_of, ka)] = 1; /* neighbours stay as they */
         split[kb] = 1;                         /* are: one corner per run */
@@ -816,6 +877,21 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings,
     for (size_t i = 0; i < nh; i++)
         if (i == 0 || (*newhot)[i] != (*newhot)[i - 1])
             (*newhot)[(*nnewhot)++] = (*newhot)[i];
+    /* the corners whose witness edge is split are open again */
+    cut = malloc(nins * sizeof *cut);
+    if (!cut)
+        goto nomem;
+    for (size_t i = 0; i < nins; i++)
+        cut[i] = make_key(rings->pts[ins[i].seg],
+                          rings->pts[succ(rings, g.ring_of, ins[i].seg)]);
+    qsort(cut, nins, sizeof *cut, cmp_key);
+    for (size_t i = 0; i < ncs; i++)
+    {
+        const edge_key k = make_key(cs[i].e0, cs[i].e1);
+        if (cs[i].state == C_CLOSE &&
+            bsearch(&k, cut, nins, sizeof *cut, cmp_key))
+            cs[i].state = C_OPEN;
+    }
     /* insert the corners in place: new ring starts, then the points moved
      * up from the back */
     qsort(ins, nins, sizeof *ins, cmp_ins);
@@ -844,6 +920,9 @@ nomem:
 cleanup:
     free(ins);
     free(split);
+    free(todo);
+    free(active);
+    free(cut);
     free_ringgrid(&g);
     return st;
 }
@@ -857,8 +936,9 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     wm_cells pg;       /* primitives by cell */
     double *pb = NULL; /* their boxes */
     memset(&pg, 0, sizeof pg);
-    wm_pt *cand = NULL, *try0 = NULL;
-    size_t ncand = 0, candcap = 0;
+    wm_pt *hits = NULL, *cand = NULL;
+    corner *cs = NULL;
+    size_t nhits = 0, hitcap = 0, ncand = 0;
 
     if (s->nbx == 0 || rings->nrings == 0 || bx < s->bx0 || by < s->by0 ||
         bx >= s->bx0 + s->nbx || by >= s->by0 + s->nby)
@@ -997,41 +1077,57 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
                             continue; /* keep a pixel off the block square */
                         const wm_pt c = {round_pos(hit[h].x),
                                          round_pos(hit[h].y)};
-                        /* the field is 1-Lipschitz: a point of the boundary is
-                         * within 0.71 px of a sample valued within 0.71 px of
-                         * 0; anything else is buried under another input */
-                        const float v = wm_field_at(f, (c.x + WM_Q / 2) / WM_Q,
-                                                    (c.y + WM_Q / 2) / WM_Q);
-                        if (fabsf(v) > 0.75f)
-                            continue;
-                        if (!push((void **)&cand, &ncand, &candcap, &c,
+                        if (!push((void **)&hits, &nhits, &hitcap, &c,
                                   sizeof c))
                             goto nomem;
                     }
                 }
         }
+    /* the field is 1-Lipschitz: a point of the boundary is within 0.71 px
+     * of a sample valued within 0.71 px of 0; anything else is buried under
+     * another input. The samples are scattered over the block's field:
+     * fetched PREFETCH hits ahead. */
+    cand = malloc((nhits + 1) * sizeof *cand);
+    if (!cand)
+        goto nomem;
+    for (size_t i = 0; i < nhits; i++)
+    {
+        if (i + PREFETCH < nhits)
+            wm_field_prefetch(f, sample_of(hits[i + PREFETCH].x),
+                              sample_of(hits[i + PREFETCH].y));
+        const wm_pt c = hits[i];
+        if (fabsf(wm_field_at(f, sample_of(c.x), sample_of(c.y))) <= 0.75f)
+            cand[ncand++] = c;
+    }
     if (ncand == 0)
         goto cleanup;
     qsort(cand, ncand, sizeof *cand, cmp_pt);
-    /* distinct candidates; those the first pass tries: not within a
-     * quarter pixel of the contour edge of their own cell (the first pass
-     * would find that edge or a nearer one and skip them) */
-    size_t nu = 0, ntry = 0;
+    /* distinct candidates; open unless within a quarter pixel of the
+     * contour edge of their own cell (a ring edge: the nearest edge search
+     * would find it or a nearer one and skip them) */
+    size_t nu = 0;
     for (size_t i = 0; i < ncand; i++)
         if (nu == 0 || !wm_pt_eq(cand[i], cand[nu - 1]))
             cand[nu++] = cand[i];
     ncand = nu;
-    try0 = malloc(ncand * sizeof *try0);
-    if (!try0)
+    cs = malloc(ncand * sizeof *cs);
+    if (!cs)
         goto nomem;
     for (size_t i = 0; i < ncand; i++)
     {
+        if (i + PREFETCH < ncand)
+        {
+            const wm_pt n = cand[i + PREFETCH];
+            wm_field_prefetch(f, n.x / WM_Q, n.y / WM_Q);
+            wm_field_prefetch(f, n.x / WM_Q, n.y / WM_Q + 1);
+        }
         const wm_pt c = cand[i];
         wm_pt a, b;
-        if (wm_contour_cell_edge(f, c.x / WM_Q, c.y / WM_Q, &a, &b) &&
-            edge_dist(a, b, c.x, c.y) <= WM_Q / 4.0)
-            continue;
-        try0[ntry++] = c;
+        const int close =
+            wm_contour_cell_edge(f, c.x / WM_Q, c.y / WM_Q, &a, &b) &&
+            edge_dist(a, b, c.x, c.y) <= WM_Q / 4.0;
+        cs[i] =
+            (corner){c, close ? a : c, close ? b : c, close ? C_CLOSE : C_OPEN};
     }
 
     /* 3-4. insertion passes: a corner next to one just inserted waits for
@@ -1042,8 +1138,8 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     {
         size_t n = 0, nnext = 0;
         uint64_t *next = NULL;
-        st = insert_pass(&in, rings, pass ? cand : try0, pass ? ncand : ntry,
-                         pass ? hot : NULL, nhot, &next, &nnext, &n);
+        st = insert_pass(&in, rings, cs, ncand, pass ? hot : NULL, nhot, &next,
+                         &nnext, &n);
         free(hot);
         hot = next;
         nhot = nnext;
@@ -1065,7 +1161,8 @@ cleanup:
     free(pr);
     wm_cells_free(&pg);
     free(pb);
-    free(try0);
+    free(cs);
     free(cand);
+    free(hits);
     return st;
 }

@@ -1034,7 +1034,9 @@ cleanup:
     return st;
 }
 
-float wm_field_at(const wm_field *f, int32_t c, int32_t r)
+/* The tile holding window sample (c, r) (a sample on a tile border is read
+ * from the tile below or left of it) and the sample's offset in it. */
+static size_t tile_of(const wm_field *f, int32_t c, int32_t r, int32_t *off)
 {
     int32_t tx = c > 0 ? (c - 1) / WM_TILE : 0;
     int32_t ty = r > 0 ? (r - 1) / WM_TILE : 0;
@@ -1042,7 +1044,14 @@ float wm_field_at(const wm_field *f, int32_t c, int32_t r)
         tx = f->ntx - 1;
     if (ty >= f->nty)
         ty = f->nty - 1;
-    const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+    *off = (r - ty * WM_TILE) * TS1 + (c - tx * WM_TILE);
+    return (size_t)ty * (size_t)f->ntx + (size_t)tx;
+}
+
+float wm_field_at(const wm_field *f, int32_t c, int32_t r)
+{
+    int32_t off;
+    const size_t t = tile_of(f, c, r, &off);
     switch (f->kind[t])
     {
     case WM_TILE_WATER:
@@ -1050,8 +1059,16 @@ float wm_field_at(const wm_field *f, int32_t c, int32_t r)
     case WM_TILE_LAND:
         return f->band;
     default:
-        return f->val[t][(r - ty * WM_TILE) * TS1 + (c - tx * WM_TILE)];
+        return f->val[t][off];
     }
+}
+
+void wm_field_prefetch(const wm_field *f, int32_t c, int32_t r)
+{
+    int32_t off;
+    const size_t t = tile_of(f, c, r, &off);
+    if (f->val[t]) /* NULL for a uniform tile */
+        __builtin_prefetch(f->val[t] + off);
 }
 
 void wm_field_free(wm_field *f)

@@ -113,6 +113,11 @@ extern "C"
     /** Value of window sample (c, r), 0 <= c < w, 0 <= r < h. */
     float wm_field_at(const wm_field *f, int32_t c, int32_t r);
 
+    /** Asks the cache for what wm_field_at(f, c, r) will read: a caller
+     *  reading scattered samples issues it some samples ahead, so that the
+     *  memory latencies overlap. */
+    void wm_field_prefetch(const wm_field *f, int32_t c, int32_t r);
+
     /** Frees what f owns; f may be NULL. */
     void wm_field_free(wm_field *f);
 
