@@ -50,13 +50,23 @@ enum
 };
 
 /* A segment of a cell, from the crossing on its side `iside` (its in edge)
- * to the one on `oside` (its out edge). */
+ * to the one on `oside` (its out edge), with its links: the chains are
+ * walked in link order, so what a step reads is in one place. */
 typedef struct
 {
     wm_pt in_pt, out_pt;
     int32_t c, r; /* its cell */
     uint8_t iside, oside;
+    uint8_t flags; /* HAS_PRED, USED */
+    uint32_t next; /* the segment its out edge leads to, or NO_SEG */
 } seg;
+
+#define NO_SEG UINT32_MAX
+enum
+{
+    HAS_PRED = 1, /* some segment's next */
+    USED = 2      /* walked */
+};
 
 /* The segments of one tile: segs[s0, s1), its first cell (c0, r0). */
 typedef struct
@@ -143,6 +153,8 @@ static int push_seg(state *s, wm_pt ip, wm_pt op, int32_t c, int32_t r,
     g->r = r;
     g->iside = (uint8_t)iside;
     g->oside = (uint8_t)oside;
+    g->flags = 0;
+    g->next = NO_SEG;
     return 1;
 }
 
@@ -304,11 +316,9 @@ static int crosses_tile(const state *s, size_t i, int in)
            r / WM_TILE != g->r / WM_TILE;
 }
 
-/* Links the segments whose out edge is inside their tile (next[],
- * haspred[]; next[i] = SIZE_MAX elsewhere) and lists in bnd the segments
- * with an edge on a tile side. Returns how many. */
-static size_t link_tiles(const state *s, size_t *next, uint8_t *haspred,
-                         size_t *bnd)
+/* Links the segments whose out edge is inside their tile and lists in bnd
+ * the segments with an edge on a tile side. Returns how many. */
+static size_t link_tiles(state *s, size_t *bnd)
 {
     uint32_t first[WM_TILE * WM_TILE]; /* 1 + offset of the cell's first */
     size_t nbnd = 0;
@@ -322,8 +332,7 @@ static size_t link_tiles(const state *s, size_t *next, uint8_t *haspred,
                 (uint32_t)(i - ts->s0 + 1);
         for (size_t i = ts->s0; i < ts->s1; i++)
         {
-            const seg *g = &s->segs[i];
-            next[i] = SIZE_MAX;
+            seg *g = &s->segs[i];
             const int out_crosses = crosses_tile(s, i, 0);
             if (out_crosses || crosses_tile(s, i, 1))
                 bnd[nbnd++] = i;
@@ -338,8 +347,8 @@ static size_t link_tiles(const state *s, size_t *next, uint8_t *haspred,
                     break;
                 if (s->segs[j].iside == ((g->oside + 2) & 3)) /* across */
                 {
-                    next[i] = j;
-                    haspred[j] = 1;
+                    g->next = (uint32_t)j;
+                    s->segs[j].flags |= HAS_PRED;
                     break;
                 }
             }
@@ -356,8 +365,7 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
 {
     wm_status st = WM_OK;
     state s = {f->w - 1, NULL, 0, 0, NULL, 0, 0};
-    size_t *slot = NULL, *next = NULL, *bnd = NULL;
-    uint8_t *used = NULL, *haspred = NULL;
+    size_t *slot = NULL, *bnd = NULL;
     entry *ent = NULL;
     size_t nent = 0;
     wm_rings_clear(out);
@@ -401,17 +409,16 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
             s.tiles[s.ntiles++] = ts;
         }
 
-    next = malloc((s.nsegs + 1) * sizeof *next);
-    used = calloc(s.nsegs + 1, 1);
-    haspred = calloc(s.nsegs + 1, 1);
+    if (s.nsegs >= NO_SEG)
+        goto nomem; /* links need 32 bits */
     ent = malloc((s.nsegs + 1) * sizeof *ent);
     bnd = malloc((s.nsegs + 1) * sizeof *bnd);
-    if (!next || !used || !haspred || !ent || !bnd)
+    if (!ent || !bnd)
         goto nomem;
-    /* next[] links chains: inside a tile through a map from cell to its
+    /* next links chains: inside a tile through a map from cell to its
      * first segment, across tiles through a hash of the segments entering
      * over a tile side */
-    size_t nbnd = link_tiles(&s, next, haspred, bnd);
+    size_t nbnd = link_tiles(&s, bnd);
     size_t hcap = 16;
     while (hcap < 2 * nbnd + 2)
         hcap *= 2;
@@ -441,8 +448,8 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
         {
             if (in_id(&s, &s.segs[slot[h]]) == key)
             {
-                next[i] = slot[h];
-                haspred[slot[h]] = 1;
+                s.segs[i].next = (uint32_t)slot[h];
+                s.segs[slot[h]].flags |= HAS_PRED;
                 break;
             }
             h = (h + 1) & (hcap - 1);
@@ -450,7 +457,7 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
     }
     /* chain starts: entries on the block square */
     for (size_t i = 0; i < s.nsegs; i++)
-        if (!haspred[i])
+        if (!(s.segs[i].flags & HAS_PRED))
         {
             ent[nent].pos = perim(s.segs[i].in_pt, S);
             ent[nent].seg = i;
@@ -461,20 +468,20 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
     /* open chains, closed along the square */
     for (size_t e = 0; e < nent; e++)
     {
-        if (used[ent[e].seg])
+        if (s.segs[ent[e].seg].flags & USED)
             continue;
         size_t cur = e;
         for (;;)
         {
             size_t g = ent[cur].seg;
-            if (used[g])
+            if (s.segs[g].flags & USED)
                 break; /* ring closed */
             if (wm_rings_push(out, s.segs[g].in_pt) != WM_OK)
                 goto nomem;
             size_t last = g;
-            for (; g != SIZE_MAX; g = next[g])
+            for (; g != NO_SEG; g = s.segs[g].next)
             {
-                used[g] = 1;
+                s.segs[g].flags |= USED;
                 last = g;
                 if (wm_rings_push(out, s.segs[g].out_pt) != WM_OK)
                     goto nomem;
@@ -510,16 +517,16 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
     /* closed loops inside the block */
     for (size_t i = 0; i < s.nsegs; i++)
     {
-        if (used[i])
+        if (s.segs[i].flags & USED)
             continue;
-        for (size_t g = i; !used[g]; g = next[g])
+        for (size_t g = i; !(s.segs[g].flags & USED); g = s.segs[g].next)
         {
-            if (next[g] == SIZE_MAX)
+            if (s.segs[g].next == NO_SEG)
             {
                 st = wm_fail(ctx, WM_ERR_INTERNAL, "contour: open chain");
                 goto cleanup;
             }
-            used[g] = 1;
+            s.segs[g].flags |= USED;
             if (wm_rings_push(out, s.segs[g].out_pt) != WM_OK)
                 goto nomem;
         }
@@ -544,9 +551,6 @@ cleanup:
     free(s.tiles);
     free(bnd);
     free(slot);
-    free(next);
-    free(used);
-    free(haspred);
     free(ent);
     return st;
 }
