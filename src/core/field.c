@@ -434,18 +434,23 @@ static uint64_t parity_row(const work *w, size_t k, int32_t r, int32_t c0)
     const size_t key = row_key(w, k, r);
     if (key == SIZE_MAX)
         return 0;
-    uint64_t in = w->base[key], m = 0;
-    size_t ti = w->tog_start[key];
-    const size_t te = w->tog_start[key + 1];
-    for (int32_t q = 0; q < WM_TS1; q++)
+    /* bit q: the base parity flipped by every crossing at or left of
+     * c0 + q; those left of the tile found by bisection, each inside it
+     * flips bits q and up */
+    const uint64_t all = (UINT64_C(1) << WM_TS1) - 1;
+    const size_t t0 = w->tog_start[key], te = w->tog_start[key + 1];
+    size_t lo = t0, hi = te; /* first crossing > c0 */
+    while (lo < hi)
     {
-        while (ti < te && w->tog[ti] <= c0 + q)
-        {
-            in ^= 1;
-            ti++;
-        }
-        m |= in << q;
+        const size_t mid = lo + (hi - lo) / 2;
+        if (w->tog[mid] <= c0)
+            lo = mid + 1;
+        else
+            hi = mid;
     }
+    uint64_t m = (w->base[key] ^ ((lo - t0) & 1)) ? all : 0;
+    for (size_t ti = lo; ti < te && w->tog[ti] <= c0 + WM_TILE; ti++)
+        m ^= all & (all << (w->tog[ti] - c0));
     return m;
 }
 
