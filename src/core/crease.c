@@ -887,9 +887,10 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings, corner *cs,
     qsort(cut, nins, sizeof *cut, cmp_key);
     for (size_t i = 0; i < ncs; i++)
     {
+        if (cs[i].state != C_CLOSE)
+            continue;
         const edge_key k = make_key(cs[i].e0, cs[i].e1);
-        if (cs[i].state == C_CLOSE &&
-            bsearch(&k, cut, nins, sizeof *cut, cmp_key))
+        if (bsearch(&k, cut, nins, sizeof *cut, cmp_key))
             cs[i].state = C_OPEN;
     }
     /* insert the corners in place: new ring starts, then the points moved
@@ -936,9 +937,9 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     wm_cells pg;       /* primitives by cell */
     double *pb = NULL; /* their boxes */
     memset(&pg, 0, sizeof pg);
-    wm_pt *hits = NULL, *cand = NULL;
+    wm_pt *cand = NULL; /* primitive crossings, then the kept ones */
     corner *cs = NULL;
-    size_t nhits = 0, hitcap = 0, ncand = 0;
+    size_t ncand = 0, candcap = 0, nkept = 0;
 
     if (s->nbx == 0 || rings->nrings == 0 || bx < s->bx0 || by < s->by0 ||
         bx >= s->bx0 + s->nbx || by >= s->by0 + s->nby)
@@ -1077,7 +1078,7 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
                             continue; /* keep a pixel off the block square */
                         const wm_pt c = {round_pos(hit[h].x),
                                          round_pos(hit[h].y)};
-                        if (!push((void **)&hits, &nhits, &hitcap, &c,
+                        if (!push((void **)&cand, &ncand, &candcap, &c,
                                   sizeof c))
                             goto nomem;
                     }
@@ -1086,19 +1087,17 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     /* the field is 1-Lipschitz: a point of the boundary is within 0.71 px
      * of a sample valued within 0.71 px of 0; anything else is buried under
      * another input. The samples are scattered over the block's field:
-     * fetched PREFETCH hits ahead. */
-    cand = malloc((nhits + 1) * sizeof *cand);
-    if (!cand)
-        goto nomem;
-    for (size_t i = 0; i < nhits; i++)
+     * fetched PREFETCH hits ahead. The kept ones are packed in place. */
+    for (size_t i = 0; i < ncand; i++)
     {
-        if (i + PREFETCH < nhits)
-            wm_field_prefetch(f, sample_of(hits[i + PREFETCH].x),
-                              sample_of(hits[i + PREFETCH].y));
-        const wm_pt c = hits[i];
+        if (i + PREFETCH < ncand)
+            wm_field_prefetch(f, sample_of(cand[i + PREFETCH].x),
+                              sample_of(cand[i + PREFETCH].y));
+        const wm_pt c = cand[i];
         if (fabsf(wm_field_at(f, sample_of(c.x), sample_of(c.y))) <= 0.75f)
-            cand[ncand++] = c;
+            cand[nkept++] = c;
     }
+    ncand = nkept;
     if (ncand == 0)
         goto cleanup;
     qsort(cand, ncand, sizeof *cand, cmp_pt);
@@ -1163,6 +1162,5 @@ cleanup:
     free(pb);
     free(cs);
     free(cand);
-    free(hits);
     return st;
 }
