@@ -37,7 +37,7 @@ static void usage(int code)
         "       [-block_size <m>] [-simplify <m>] [-method CONTOUR|PAPER]\n"
         "       [-heuristic "
         "CLOSEST|DIRECTIONAL_CW|DIRECTIONAL_CCW|LEAST_ANGLE]\n"
-        "       [-merge_distance <m>]\n"
+        "       [-merge_distance <m>] [-min_feature_area <m2>]\n"
         "       [-device AUTO|CPU|OPENCL] [-num_threads <n>|ALL_CPUS]\n"
         "       [-target_srs <srs>] [-spat <xmin> <ymin> <xmax> <ymax>]\n"
         "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco "

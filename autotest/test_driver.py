@@ -16,7 +16,7 @@ import scenes
 ALL_OPTIONS = ('RIVERS', 'RIVERS_LAYER', 'RIVERS_WHERE', 'LAKES', 'LAKES_LAYER',
                'LAKES_WHERE', 'WIDTH', 'WIDTH_FIELD', 'PIXEL_SIZE', 'BLOCK_SIZE',
                'SIMPLIFY', 'METHOD', 'HEURISTIC', 'MERGE_DISTANCE', 'DEVICE',
-               'NUM_THREADS', 'TARGET_SRS')
+               'NUM_THREADS', 'TARGET_SRS', 'MIN_FEATURE_AREA')
 
 AREA_REL_TOL = 0.01  # driver water area vs oracle on the small hand-made scene
 

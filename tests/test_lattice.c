@@ -62,6 +62,40 @@ static int cells_mismatches(wm_cells *g, int32_t side, size_t n, unsigned seed)
     return bad;
 }
 
+/* Appends the axis-aligned square [x0, x1] x [y0, y1], counter-clockwise
+ * (water inside) or clockwise (a hole). */
+static void push_square(wm_rings *r, int32_t x0, int32_t y0, int32_t x1,
+                        int32_t y1, int cw)
+{
+    const wm_pt p[4] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+    for (int k = 0; k < 4; k++)
+        wm_rings_push(r, p[cw ? 3 - k : k]);
+    wm_rings_close(r);
+}
+
+/* MIN_FEATURE_AREA on a block of side 100: rings inside the block below the
+ * area go (with what they enclose), rings on the square stay. */
+static void test_drop_small(void)
+{
+    wm_rings r;
+    memset(&r, 0, sizeof r);
+    push_square(&r, 0, 0, 3, 3, 0);     /* 9, on the square: kept */
+    push_square(&r, 10, 10, 13, 13, 0); /* 9: dropped */
+    push_square(&r, 20, 20, 60, 60, 0); /* 1600: kept */
+    push_square(&r, 30, 30, 32, 32, 1); /* hole of 4: dropped */
+    push_square(&r, 40, 40, 50, 50, 1); /* hole of 100: kept */
+    push_square(&r, 44, 44, 46, 46, 0); /* island lake of 4 in it: dropped */
+    TAP_EQ(wm_rings_drop_small(&r, 100, 0.0), 0, "drop_small: 0 is off");
+    TAP_EQ(r.nrings, 6, "drop_small: off keeps all");
+    TAP_EQ(wm_rings_drop_small(&r, 100, 10.0), 3, "drop_small: 3 dropped");
+    TAP_EQ(r.nrings, 3, "drop_small: 3 kept");
+    TAP_EQ(r.npts, 12, "drop_small: points compacted");
+    TAP_EQ(r.pts[r.start[1]].x, 20, "drop_small: order kept");
+    TAP_EQ(r.pts[r.start[2]].x, 40, "drop_small: the large hole kept");
+    TAP_EQ(r.start[3], 12, "drop_small: ends consistent");
+    wm_rings_free(&r);
+}
+
 int main(void)
 {
     const wm_pt a = {0, 0}, b = {10, 0}, c = {5, 5}, d = {5, -5};
@@ -134,5 +168,6 @@ int main(void)
     TAP_EQ(cells_mismatches(&g, 7, 0, 5), 0, "cells: no items");
     wm_cells_free(&g);
     wm_cells_free(NULL);
+    test_drop_small();
     return TAP_DONE();
 }

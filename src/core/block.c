@@ -204,11 +204,19 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
             wm_paper_extract(f, (wm_heuristic)opts->heuristic, &raw, NULL, ctx);
     else
     {
-        st = wm_contour_extract(f, &raw, ctx);
+        wm_probe probe;
+        st = wm_probe_init(&probe, s, bx, by);
+        if (st != WM_OK)
+            st = wm_fail(ctx, st, "out of memory extracting contours");
         if (st == WM_OK)
-            st = wm_crease_recover(s, f, bx, by, &raw, ctx);
+            st = wm_contour_extract_probed(f, &probe, &raw, ctx);
+        if (st == WM_OK)
+            st = wm_crease_recover_probed(&probe, f, &raw, ctx);
+        wm_probe_free(&probe);
     }
     wm_field_free(f);
+    if (st == WM_OK)
+        wm_rings_drop_small(&raw, s->n * WM_Q, opts->min_area);
     double t2 = wm_now();
     res->seconds[WM_STAGE_EXTRACT] = t2 - t1;
     if (st != WM_OK)

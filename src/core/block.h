@@ -38,8 +38,9 @@ extern "C"
         int triangulate; /**< 0: polygons only */
         const wm_field_device *dev; /**< evaluates the field; NULL: C path */
         wm_method method;
-        int heuristic; /**< a wm_heuristic (paper.h), METHOD=PAPER */
-        double merge;  /**< vertex merge distance, lattice units; 0 off */
+        int heuristic;   /**< a wm_heuristic (paper.h), METHOD=PAPER */
+        double merge;    /**< vertex merge distance, lattice units; 0 off */
+        double min_area; /**< MIN_FEATURE_AREA, square lattice units; 0 off */
     } wm_block_opts;
 
     /**

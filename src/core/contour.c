@@ -18,14 +18,19 @@
  * edge to an in edge. With one out edge the pairing is forced.
  *
  * Saddle rule (two out edges: diagonal corners 0,2 or 1,3 are water): the
- * mean of the four corner values (summed in corner order) decides; if it
- * is <= 0 the water corners are joined through the centre and each out
- * edge pairs with the next in edge counter-clockwise, otherwise they are
- * separated and each out edge pairs with the previous in edge. Why: the
- * mean is the bilinear interpolant's value at the centre (GDAL's contour
- * does the same); it depends only on the cell's four samples, so the rule
- * is deterministic and identical wherever the cell is computed. Either way
- * the two segments cut opposite corners and cannot meet.
+ * class of the cell's centre decides; if it is water the water corners are
+ * joined through the centre and each out edge pairs with the next in edge
+ * counter-clockwise, otherwise they are separated and each out edge pairs
+ * with the previous in edge. The centre's class is the sign of the union's
+ * signed distance there, evaluated from the inputs (probe.h): a saddle is
+ * where two boundaries pass between the samples, typically a strip of land
+ * or water narrower than a pixel running diagonally, and its true class at
+ * the centre keeps the strip connected where the samples alone cannot tell.
+ * Without a probe (unit tests of the field alone) the mean of the four
+ * corner values (summed in corner order), the bilinear interpolant's value
+ * at the centre as in GDAL's contour, decides. Either way the decision
+ * belongs to the cell alone (a cell is in one block), so it is
+ * deterministic, and the two segments cut opposite corners and cannot meet.
  *
  * Closing: chains that end on the block square are joined by walking the
  * square counter-clockwise from an exit crossing to the next entry
@@ -77,7 +82,8 @@ typedef struct
 
 typedef struct
 {
-    int32_t n; /* cells per side */
+    int32_t n;             /* cells per side */
+    const wm_probe *probe; /* saddle decisions; NULL: mean of the corners */
     seg *segs;
     size_t nsegs, cap;
     tilesegs *tiles;
@@ -182,7 +188,10 @@ static int cell(state *s, int32_t c, int32_t r, const float *p)
         pt[EL] = crossing(v[0], v[3], X, Y, 1);
     const int saddle = w[0] == w[2] && w[1] == w[3];
     int joined = 0;
-    if (saddle)
+    if (saddle && s->probe)
+        joined = wm_probe_distance(s->probe, X + WM_Q / 2, Y + WM_Q / 2,
+                                   WM_PROBE_REACH) <= 0;
+    else if (saddle)
     {
         const double mean = ((double)v[0] + v[1] + v[2] + v[3]) / 4.0;
         joined = mean <= 0;
@@ -363,8 +372,14 @@ static size_t link_tiles(state *s, size_t *bnd)
 wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                              const wm_ctx *ctx)
 {
+    return wm_contour_extract_probed(f, NULL, out, ctx);
+}
+
+wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
+                                    wm_rings *out, const wm_ctx *ctx)
+{
     wm_status st = WM_OK;
-    state s = {f->w - 1, NULL, 0, 0, NULL, 0, 0};
+    state s = {f->w - 1, probe, NULL, 0, 0, NULL, 0, 0};
     size_t *slot = NULL, *bnd = NULL;
     entry *ent = NULL;
     size_t nent = 0;

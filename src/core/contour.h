@@ -5,6 +5,7 @@
 #define WM_CONTOUR_H
 
 #include "field.h"
+#include "probe.h"
 
 #ifdef __cplusplus
 extern "C"
@@ -27,6 +28,15 @@ extern "C"
      */
     wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                                  const wm_ctx *ctx);
+
+    /**
+     * wm_contour_extract deciding saddle cells by the class of the cell's
+     * centre, from `probe` (the block's; NULL: the mean of the four corner
+     * values, as wm_contour_extract does).
+     */
+    wm_status wm_contour_extract_probed(const wm_field *f,
+                                        const wm_probe *probe, wm_rings *out,
+                                        const wm_ctx *ctx);
 
     /**
      * The ring edge wm_contour_extract makes in cell (c, r) of the field

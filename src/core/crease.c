@@ -42,6 +42,7 @@
 
 #include "contour.h"
 #include "field.h"
+#include "probe.h"
 
 #include "lattice.h"
 
@@ -222,154 +223,11 @@ static void prim_box(const prim *p, double *b)
     b[3] = fmax(p->y0, p->y1);
 }
 
-/* ---- the block's inputs ------------------------------------------------ */
-
-typedef struct
-{
-    const wm_scene *s;
-    int64_t X0, Y0; /* block origin, global lattice */
-    const uint32_t *segs;
-    size_t nsegs;
-    const uint32_t *polys;
-    size_t npolys;
-    /* river segments by cell of the block (side DCELL), each registered in
-     * the cells its box grown by radius + DREACH touches; segments touching
-     * more than WIDE cells are in `wide` instead (owned) */
-    wm_cells cells;
-    uint32_t *wide;
-    size_t nwide;
-} inputs;
-
-/* Cells of the river index, and the reach it serves (union_distance is
- * always asked for at most DREACH). */
-#define DCELL (16 * WM_Q)
-#define DREACH (4.0 * WM_Q)
-#define WIDE 1024
-
-/* Index cell (clamped to the block) of the local coordinate v. */
-static int32_t dcell(const inputs *in, double v)
-{
-    const double c = floor(v / DCELL);
-    const int32_t side = in->cells.side;
-    return c < 0 ? 0 : (c > side - 1 ? side - 1 : (int32_t)c);
-}
-
-/* Local box of river segment g grown by its radius + DREACH. */
-static void seg_reach_box(const inputs *in, const wm_river_seg *g, double *b)
-{
-    const double m = g->r + DREACH;
-    b[0] = (double)((g->ax < g->bx ? g->ax : g->bx) - in->X0) - m;
-    b[1] = (double)((g->ay < g->by ? g->ay : g->by) - in->Y0) - m;
-    b[2] = (double)((g->ax > g->bx ? g->ax : g->bx) - in->X0) + m;
-    b[3] = (double)((g->ay > g->by ? g->ay : g->by) - in->Y0) + m;
-}
-
-static wm_status build_river_index(inputs *in, int32_t S)
-{
-    wm_cells_reset(&in->cells, S / DCELL + 1);
-    in->wide = malloc((in->nsegs + 1) * sizeof *in->wide);
-    if (!in->wide)
-        return WM_ERR_NOMEM;
-    in->nwide = 0;
-    for (size_t i = 0; i < in->nsegs; i++)
-    {
-        double b[4];
-        int32_t x0, x1, y0, y1;
-        seg_reach_box(in, &in->s->segs[in->segs[i]], b);
-        if (b[2] < 0 || b[3] < 0 || b[0] > S || b[1] > S)
-            continue; /* never within reach of the block */
-        x0 = dcell(in, b[0]);
-        x1 = dcell(in, b[2]);
-        y0 = dcell(in, b[1]);
-        y1 = dcell(in, b[3]);
-        if ((int64_t)(x1 - x0 + 1) * (y1 - y0 + 1) > WIDE)
-        {
-            in->wide[in->nwide++] = in->segs[i];
-            continue;
-        }
-        for (int32_t cy = y0; cy <= y1; cy++)
-            for (int32_t cx = x0; cx <= x1; cx++)
-                if (!wm_cells_add(&in->cells, cx, cy, in->segs[i]))
-                    return WM_ERR_NOMEM;
-    }
-    return wm_cells_index(&in->cells);
-}
-
-/* Distance from (x, y) (block-local, double) to segment (global ends). */
-static double seg_dist(const inputs *in, int64_t ax, int64_t ay, int64_t bx,
-                       int64_t by, double x, double y)
-{
-    const double x0 = (double)(ax - in->X0), y0 = (double)(ay - in->Y0);
-    const double dx = (double)(bx - ax), dy = (double)(by - ay);
-    const double l2 = dx * dx + dy * dy;
-    double t = l2 > 0 ? ((x - x0) * dx + (y - y0) * dy) / l2 : 0;
-    t = t < 0 ? 0 : (t > 1 ? 1 : t);
-    const double ex = x - (x0 + t * dx), ey = y - (y0 + t * dy);
-    return sqrt(ex * ex + ey * ey);
-}
-
-/* Signed distance (lattice units, negative in water) from (x, y) to the
- * union of the block's inputs, in double precision; inputs farther than
- * `reach` (<= DREACH) are ignored (the result is then +reach or more).
- * (x, y) lies in the block square. */
-static double union_distance(const inputs *in, double x, double y, double reach)
-{
-    const wm_scene *s = in->s;
-    double d = reach;
-    const double gx = x + (double)in->X0, gy = y + (double)in->Y0;
-    /* the segments within reach are in the point's cell, or wide */
-    size_t c0, c1;
-    const int32_t cx = dcell(in, x);
-    wm_cells_row(&in->cells, dcell(in, y), cx, cx, &c0, &c1);
-    const size_t n0 = c1 - c0;
-    for (size_t i = 0; i < n0 + in->nwide; i++)
-    {
-        const wm_river_seg *g =
-            &s->segs[i < n0 ? in->cells.item[c0 + i] : in->wide[i - n0]];
-        const double m = g->r + reach;
-        if (gx < (double)(g->ax < g->bx ? g->ax : g->bx) - m ||
-            gx > (double)(g->ax > g->bx ? g->ax : g->bx) + m ||
-            gy < (double)(g->ay < g->by ? g->ay : g->by) - m ||
-            gy > (double)(g->ay > g->by ? g->ay : g->by) + m)
-            continue;
-        const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y) - g->r;
-        d = v < d ? v : d;
-    }
-    for (size_t k = 0; k < in->npolys; k++)
-    {
-        const uint32_t p = in->polys[k];
-        const wm_box b = s->poly_box[p];
-        if (gx < (double)b.x0 - reach || gx > (double)b.x1 + reach ||
-            gy < (double)b.y0 - reach || gy > (double)b.y1 + reach)
-            continue;
-        int inside = 0;
-        double dmin = INFINITY;
-        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
-        {
-            const wm_lake_edge *g = &s->edges[e];
-            const double ay = (double)(g->ay - in->Y0);
-            const double by = (double)(g->by - in->Y0);
-            if ((ay > y) != (by > y))
-            {
-                const double ax = (double)(g->ax - in->X0);
-                const double bxx = (double)(g->bx - in->X0);
-                if (x < ax + (y - ay) * (bxx - ax) / (by - ay))
-                    inside = !inside;
-            }
-            const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y);
-            dmin = v < dmin ? v : dmin;
-        }
-        const double v = inside ? -dmin : dmin;
-        d = v < d ? v : d;
-    }
-    return d;
-}
-
 /* True when the new edges a - c - b (c on the union's boundary) stay within
  * half a pixel of that boundary.
  * Rejects corners of inputs the sampling missed altogether (a lake smaller
  * than a pixel), which would otherwise become spikes. */
-static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
+static int follows_boundary(const wm_probe *in, wm_pt a, wm_pt c, wm_pt b)
 {
     const double reach = 4.0 * WM_Q;
     for (int e = 0; e < 2; e++)
@@ -379,7 +237,7 @@ static int follows_boundary(const inputs *in, wm_pt a, wm_pt c, wm_pt b)
         {
             const double t = k / 4.0;
             const double x = c.x + t * (p.x - c.x), y = c.y + t * (p.y - c.y);
-            if (fabs(union_distance(in, x, y, reach)) > 0.5 * WM_Q)
+            if (fabs(wm_probe_distance(in, x, y, reach)) > 0.5 * WM_Q)
                 return 0;
         }
     }
@@ -643,7 +501,7 @@ static int check_fn(void *arg, size_t k)
 
 /* 1 when c may be inserted into edge ka (to its successor) of the current
  * rings (see the file comment, step 4), 0 when not, -1 out of memory. */
-static int can_insert(const inputs *in, ringgrid *g, size_t ka, wm_pt c,
+static int can_insert(const wm_probe *in, ringgrid *g, size_t ka, wm_pt c,
                       int32_t S, const uint8_t *split, const insertion *ins,
                       size_t nins)
 {
@@ -772,7 +630,7 @@ static int cmp_key(const void *a, const void *b)
  * inserted, only those in them), updates their states and rebuilds the
  * rings with the accepted corners; *ninserted says how many. *newhot
  * receives this pass's hot cells (*nnewhot keys, caller frees). */
-static wm_status insert_pass(const inputs *in, wm_rings *rings, corner *cs,
+static wm_status insert_pass(const wm_probe *in, wm_rings *rings, corner *cs,
                              size_t ncs, const uint64_t *hot, size_t nhot,
                              uint64_t **newhot, size_t *nnewhot,
                              size_t *ninserted)
@@ -832,7 +690,7 @@ static wm_status insert_pass(const inputs *in, wm_rings *rings, corner *cs,
         if (nr.edge == SIZE_MAX || nr.best > R)
             continue;
         /* a corner of the union, not one buried under another input */
-        if (fabs(union_distance(in, c.x, c.y, 4.0 * WM_Q)) > 1.0)
+        if (fabs(wm_probe_distance(in, c.x, c.y, 4.0 * WM_Q)) > 1.0)
         {
             cd->state = C_DONE;
             continue;
@@ -931,6 +789,17 @@ cleanup:
 wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
                             int64_t by, wm_rings *rings, const wm_ctx *ctx)
 {
+    wm_probe in;
+    if (wm_probe_init(&in, s, bx, by) != WM_OK)
+        return wm_fail(ctx, WM_ERR_NOMEM, "out of memory recovering corners");
+    const wm_status st = wm_crease_recover_probed(&in, f, rings, ctx);
+    wm_probe_free(&in);
+    return st;
+}
+
+wm_status wm_crease_recover_probed(const wm_probe *probe, const wm_field *f,
+                                   wm_rings *rings, const wm_ctx *ctx)
+{
     wm_status st = WM_OK;
     prim *pr = NULL;
     size_t npr = 0, prcap = 0;
@@ -940,23 +809,12 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     wm_pt *cand = NULL; /* primitive crossings, then the kept ones */
     corner *cs = NULL;
     size_t ncand = 0, candcap = 0, nkept = 0;
+    const wm_probe in = *probe; /* read only */
+    const wm_scene *s = in.s;
 
-    if (s->nbx == 0 || rings->nrings == 0 || bx < s->bx0 || by < s->by0 ||
-        bx >= s->bx0 + s->nbx || by >= s->by0 + s->nby)
+    if (rings->nrings == 0 || in.nsegs + in.npolys < 1)
         return WM_OK;
     const int32_t S = s->n * WM_Q;
-    const size_t blk = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
-    inputs in = {.s = s,
-                 .X0 = bx * (int64_t)S,
-                 .Y0 = by * (int64_t)S,
-                 .segs = s->blk_seg + s->blk_seg_start[blk],
-                 .nsegs = s->blk_seg_start[blk + 1] - s->blk_seg_start[blk],
-                 .polys = s->blk_poly + s->blk_poly_start[blk],
-                 .npolys = s->blk_poly_start[blk + 1] - s->blk_poly_start[blk]};
-    if (in.nsegs + in.npolys < 1)
-        return WM_OK;
-    if (build_river_index(&in, S) != WM_OK)
-        goto nomem;
 
     /* 1. primitives, local doubles */
     const double lo = -4.0 * WM_Q, hi = (double)S + 4.0 * WM_Q;
@@ -1155,8 +1013,6 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
 nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory recovering corners");
 cleanup:
-    wm_cells_free(&in.cells);
-    free(in.wide);
     free(pr);
     wm_cells_free(&pg);
     free(pb);

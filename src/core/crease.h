@@ -5,6 +5,7 @@
 #define WM_CREASE_H
 
 #include "field.h"
+#include "probe.h"
 
 #ifdef __cplusplus
 extern "C"
@@ -35,6 +36,13 @@ extern "C"
     wm_status wm_crease_recover(const wm_scene *s, const wm_field *f,
                                 int64_t bx, int64_t by, wm_rings *rings,
                                 const wm_ctx *ctx);
+
+    /**
+     * wm_crease_recover with the block's probe already set up (the block
+     * is the probe's).
+     */
+    wm_status wm_crease_recover_probed(const wm_probe *probe, const wm_field *f,
+                                       wm_rings *rings, const wm_ctx *ctx);
 
 #ifdef __cplusplus
 }

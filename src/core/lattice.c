@@ -98,6 +98,39 @@ wm_i128 wm_ring_area2(const wm_pt *pts, size_t n)
     return a;
 }
 
+static int on_square(const wm_pt *pts, size_t n, int32_t S)
+{
+    for (size_t i = 0; i < n; i++)
+        if (pts[i].x == 0 || pts[i].y == 0 || pts[i].x == S || pts[i].y == S)
+            return 1;
+    return 0;
+}
+
+size_t wm_rings_drop_small(wm_rings *r, int32_t S, double min_area)
+{
+    size_t kept = 0, npts = 0;
+    if (!(min_area > 0) || r->nrings == 0)
+        return 0;
+    for (size_t i = 0; i < r->nrings; i++)
+    {
+        const wm_pt *p = r->pts + r->start[i];
+        const size_t n = wm_rings_len(r, i);
+        const wm_i128 a2 = wm_ring_area2(p, n);
+        const double area = (double)(a2 < 0 ? -a2 : a2) / 2.0;
+        if (!on_square(p, n, S) && area < min_area)
+            continue;
+        memmove(r->pts + npts, p, n * sizeof *p);
+        r->start[kept] = npts;
+        npts += n;
+        kept++;
+    }
+    const size_t dropped = r->nrings - kept;
+    r->start[kept] = npts;
+    r->nrings = kept;
+    r->npts = npts;
+    return dropped;
+}
+
 int wm_seg_dist2_exceeds(wm_pt a, wm_pt b, wm_pt p, wm_i128 tol2)
 {
     const int64_t abx = (int64_t)b.x - a.x, aby = (int64_t)b.y - a.y;

@@ -212,6 +212,17 @@ extern "C"
     /** Twice the signed area of a ring of n points, exact (positive: CCW). */
     wm_i128 wm_ring_area2(const wm_pt *pts, size_t n);
 
+    /**
+     * Removes, in place, every ring that has no vertex on the block square
+     * [0, S]^2 and whose area is below min_area (square lattice units):
+     * MIN_FEATURE_AREA. A ring nested in a removed ring is inside the block
+     * and smaller, so it goes too, and the rest keep their nesting. A ring
+     * with a vertex on the square is a piece of a feature the neighbouring
+     * block also holds: it is kept whatever its area, so both blocks decide
+     * alike (seams stay exact). Returns how many rings were removed.
+     */
+    size_t wm_rings_drop_small(wm_rings *r, int32_t S, double min_area);
+
 #ifdef __cplusplus
 }
 #endif

@@ -21,7 +21,8 @@ const char *const WM_OPTION_NAMES[] = {
     "WIDTH",       "WIDTH_FIELD",    "PIXEL_SIZE",
     "BLOCK_SIZE",  "SIMPLIFY",       "METHOD",
     "HEURISTIC",   "MERGE_DISTANCE", "DEVICE",
-    "NUM_THREADS", "TARGET_SRS",     NULL};
+    "NUM_THREADS", "TARGET_SRS",     "MIN_FEATURE_AREA",
+    NULL};
 
 /* Parses a strictly numeric option value; CPLError on failure. */
 static int number(CSLConstList opts, const char *name, double def, double *out)
@@ -149,6 +150,15 @@ static int params_parse(CSLConstList opts, WMParams *p)
     {
         CPLError(CE_Failure, CPLE_IllegalArg,
                  "WATERMESH: MERGE_DISTANCE=%g must be >= 0.", p->merge);
+        return FALSE;
+    }
+    if (!number(opts, "MIN_FEATURE_AREA", 0.0, &p->min_feature_area))
+        return FALSE;
+    if (!(p->min_feature_area >= 0))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: MIN_FEATURE_AREA=%g must be >= 0.",
+                 p->min_feature_area);
         return FALSE;
     }
     const char *d = CSLFetchNameValueDef(opts, "DEVICE", "AUTO");

@@ -31,15 +31,16 @@ typedef enum
 /** Parsed, validated parameters. */
 typedef struct
 {
-    double width;      /* default river width, m */
-    char *width_field; /* or NULL */
-    double pixel;      /* PIXEL_SIZE, m */
-    double block;      /* BLOCK_SIZE, m */
-    int32_t n;         /* block / pixel */
-    double simplify;   /* m */
-    wm_method method;  /* METHOD */
-    int heuristic;     /* HEURISTIC, a wm_heuristic (METHOD=PAPER) */
-    double merge;      /* MERGE_DISTANCE, m; 0: off */
+    double width;            /* default river width, m */
+    char *width_field;       /* or NULL */
+    double pixel;            /* PIXEL_SIZE, m */
+    double block;            /* BLOCK_SIZE, m */
+    int32_t n;               /* block / pixel */
+    double simplify;         /* m */
+    wm_method method;        /* METHOD */
+    int heuristic;           /* HEURISTIC, a wm_heuristic (METHOD=PAPER) */
+    double merge;            /* MERGE_DISTANCE, m; 0: off */
+    double min_feature_area; /* MIN_FEATURE_AREA, m^2; 0: off */
     WMDeviceKind device;
     int num_threads;
     char *target_srs; /* or NULL */

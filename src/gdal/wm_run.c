@@ -159,6 +159,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     r.opts.method = s->params.method;
     r.opts.heuristic = s->params.heuristic;
     r.opts.merge = s->params.merge / s->unit;
+    r.opts.min_area = s->params.min_feature_area / (s->unit * s->unit);
     r.opts.dev = WMDeviceField(s->device);
     r.pipelined = r.opts.dev != NULL;
     r.slot = CPLCalloc(r.window, sizeof *r.slot);
