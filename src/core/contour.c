@@ -43,6 +43,8 @@
  */
 #include "contour.h"
 
+#include "subpixel.h"
+
 #include <stdlib.h>
 #include <string.h>
 
@@ -62,7 +64,7 @@ typedef struct
     wm_pt in_pt, out_pt;
     int32_t c, r; /* its cell */
     uint8_t iside, oside;
-    uint8_t flags; /* HAS_PRED, USED */
+    uint8_t flags; /* HAS_PRED, USED, LINK_IN, LINK_OUT */
     uint32_t next; /* the segment its out edge leads to, or NO_SEG */
 } seg;
 
@@ -70,7 +72,10 @@ typedef struct
 enum
 {
     HAS_PRED = 1, /* some segment's next */
-    USED = 2      /* walked */
+    USED = 2,     /* walked */
+    LINK_IN = 4,  /* its in edge is linked through the hash: it lies on an
+                     ambiguous cell, or the segment is one of such a cell */
+    LINK_OUT = 8  /* likewise its out edge */
 };
 
 /* The segments of one tile: segs[s0, s1), its first cell (c0, r0). */
@@ -82,52 +87,22 @@ typedef struct
 
 typedef struct
 {
-    int32_t n;             /* cells per side */
-    const wm_probe *probe; /* saddle decisions; NULL: mean of the corners */
+    int32_t n;            /* cells per side */
+    wm_probe *probe;      /* saddle decisions and hidden crossings; NULL: mean
+                             of the corners, no hidden crossings */
+    wm_hidden hid;        /* hidden crossings and ambiguous cells */
+    int32_t cur_c, cur_r; /* the ambiguous cell being done */
     seg *segs;
     size_t nsegs, cap;
     tilesegs *tiles;
     size_t ntiles, tcap;
 } state;
 
-/* Edge id: horizontal edge from sample (c,r) to (c+1,r) = 2*(r*(n+1)+c),
- * vertical from (c,r) to (c,r+1) = 2*(r*(n+1)+c)+1. */
-static uint64_t edge_id(int32_t n, int32_t c, int32_t r, int vertical)
-{
-    return 2 * ((uint64_t)r * (uint64_t)(n + 1) + (uint64_t)c) +
-           (uint64_t)vertical;
-}
-
-/* Id of side `side` (EB..EL) of cell (c, r). */
-static uint64_t side_id(int32_t n, int32_t c, int32_t r, int side)
-{
-    switch (side)
-    {
-    case EB:
-        return edge_id(n, c, r, 0);
-    case ER:
-        return edge_id(n, c + 1, r, 1);
-    case ET:
-        return edge_id(n, c, r + 1, 0);
-    default:
-        return edge_id(n, c, r, 1);
-    }
-}
-
-static uint64_t in_id(const state *s, const seg *g)
-{
-    return side_id(s->n, g->c, g->r, g->iside);
-}
-
-static uint64_t out_id(const state *s, const seg *g)
-{
-    return side_id(s->n, g->c, g->r, g->oside);
-}
-
 /* Crossing on the edge from sample a (value va) to sample b (value vb),
  * which differ in class; (x, y) lattice of a; b is one sample to the right
  * (vertical == 0) or above (vertical == 1). */
-static wm_pt crossing(float va, float vb, int32_t x, int32_t y, int vertical)
+wm_pt wm_contour_crossing(float va, float vb, int32_t x, int32_t y,
+                          int vertical)
 {
     const double t = (double)va / ((double)va - (double)vb);
     double o = t * WM_Q + 0.5;
@@ -179,13 +154,13 @@ static int cell(state *s, int32_t c, int32_t r, const float *p)
         kind[k] = w[k] == w[(k + 1) & 3] ? 0 : (w[k] ? 1 : 2);
     /* crossings always interpolated from the edge's lower sample */
     if (kind[EB])
-        pt[EB] = crossing(v[0], v[1], X, Y, 0);
+        pt[EB] = wm_contour_crossing(v[0], v[1], X, Y, 0);
     if (kind[ER])
-        pt[ER] = crossing(v[1], v[2], X + WM_Q, Y, 1);
+        pt[ER] = wm_contour_crossing(v[1], v[2], X + WM_Q, Y, 1);
     if (kind[ET])
-        pt[ET] = crossing(v[3], v[2], X, Y + WM_Q, 0);
+        pt[ET] = wm_contour_crossing(v[3], v[2], X, Y + WM_Q, 0);
     if (kind[EL])
-        pt[EL] = crossing(v[0], v[3], X, Y, 1);
+        pt[EL] = wm_contour_crossing(v[0], v[3], X, Y, 1);
     const int saddle = w[0] == w[2] && w[1] == w[3];
     int joined = 0;
     if (saddle && s->probe)
@@ -233,10 +208,11 @@ int wm_contour_cell_edge(const wm_field *f, int32_t c, int32_t r, wm_pt *a,
             continue;
         /* cell()'s crossing on edge k (corner k to k + 1), from the edge's
          * lower sample */
-        const wm_pt p = k == EB   ? crossing(v[0], v[1], X, Y, 0)
-                        : k == ER ? crossing(v[1], v[2], X + WM_Q, Y, 1)
-                        : k == ET ? crossing(v[3], v[2], X, Y + WM_Q, 0)
-                                  : crossing(v[0], v[3], X, Y, 1);
+        const wm_pt p =
+            k == EB   ? wm_contour_crossing(v[0], v[1], X, Y, 0)
+            : k == ER ? wm_contour_crossing(v[1], v[2], X + WM_Q, Y, 1)
+            : k == ET ? wm_contour_crossing(v[3], v[2], X, Y + WM_Q, 0)
+                      : wm_contour_crossing(v[0], v[3], X, Y, 1);
         if (w[k])
         {
             *a = p; /* an out edge: where the segment starts */
@@ -273,6 +249,14 @@ static int cmp_entry(const void *a, const void *b)
 {
     const int64_t x = ((const entry *)a)->pos, y = ((const entry *)b)->pos;
     return (x > y) - (x < y);
+}
+
+/* A crossing identifies the link between the two segments that share it:
+ * it lies on one cell edge (or inside an ambiguous cell) and both compute
+ * it alike. */
+static uint64_t pt_key(wm_pt p)
+{
+    return (uint64_t)(uint32_t)p.x << 32 | (uint32_t)p.y;
 }
 
 static size_t hash64(uint64_t k, size_t mask)
@@ -313,11 +297,14 @@ static uint64_t water_bits(const float *row)
 /* The cell across side `side` of cell (c, r). */
 static const int32_t side_dc[4] = {0, 1, 0, -1}, side_dr[4] = {-1, 0, 1, 0};
 
-/* Whether segment i's in edge (in == 1) or out edge (in == 0) lies on a
- * side of its tile, the cell across it in another tile or off the block. */
+/* Whether segment i's in edge (in == 1) or out edge (in == 0) is linked
+ * through the hash: it lies on a side of its tile (the cell across it in
+ * another tile or off the block), or on an ambiguous cell. */
 static int crosses_tile(const state *s, size_t i, int in)
 {
     const seg *g = &s->segs[i];
+    if (g->flags & (in ? LINK_IN : LINK_OUT))
+        return 1;
     const int side = in ? g->iside : g->oside;
     const int32_t c = g->c + side_dc[side], r = g->r + side_dr[side];
     /* tiles are WM_TILE-aligned: same tile when the same tile index */
@@ -369,17 +356,71 @@ static size_t link_tiles(state *s, size_t *bnd)
     return nbnd;
 }
 
+/* Rows of tile t's ambiguous cells as bit masks (cmask[row], bit: column
+ * in the tile); *hc walks the sorted keys tile by tile. Returns whether
+ * there is any. */
+static int ambiguous_of_tile(const wm_hidden *h, size_t t, size_t *hc,
+                             uint64_t *cmask)
+{
+    int has = 0;
+    memset(cmask, 0, WM_TILE * sizeof *cmask);
+    while (*hc < h->ncell && (h->cell[*hc] >> 32) < t)
+        (*hc)++;
+    for (; *hc < h->ncell && (h->cell[*hc] >> 32) == t; (*hc)++)
+    {
+        const uint32_t local = (uint32_t)(h->cell[*hc] & 0xffffffffu);
+        cmask[local / WM_TILE] |= UINT64_C(1) << (local % WM_TILE);
+        has = 1;
+    }
+    return has;
+}
+
+/* Segments s0.. of a tile near ambiguous cells: an in or out edge on a
+ * side of an ambiguous cell takes that side's exact crossing, if listed,
+ * and is linked through the hash. */
+static void mark_links(state *s, const wm_field *f, size_t s0)
+{
+    for (size_t i = s0; i < s->nsegs; i++)
+    {
+        seg *g = &s->segs[i];
+        for (int in = 0; in < 2; in++)
+        {
+            const int side = in ? g->iside : g->oside;
+            if (!wm_hidden_is_cell(&s->hid, f, g->c + side_dc[side],
+                                   g->r + side_dr[side]))
+                continue;
+            g->flags |= in ? LINK_IN : LINK_OUT;
+            wm_hidden_side_crossing(&s->hid, f, g->c, g->r, side,
+                                    in ? &g->in_pt : &g->out_pt);
+        }
+    }
+}
+
+/* wm_segment_fn for the segments of an ambiguous cell: linked through the
+ * hash at both ends. */
+static int push_ambiguous(void *user, wm_pt a, wm_pt b)
+{
+    state *s = user;
+    if (!push_seg(s, a, b, s->cur_c, s->cur_r, 0, 0))
+        return 0;
+    s->segs[s->nsegs - 1].flags = LINK_IN | LINK_OUT;
+    return 1;
+}
+
 wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
                              const wm_ctx *ctx)
 {
     return wm_contour_extract_probed(f, NULL, out, ctx);
 }
 
-wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
+wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
                                     wm_rings *out, const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
-    state s = {f->w - 1, probe, NULL, 0, 0, NULL, 0, 0};
+    state s;
+    memset(&s, 0, sizeof s);
+    s.n = f->w - 1;
+    s.probe = probe;
     size_t *slot = NULL, *bnd = NULL;
     entry *ent = NULL;
     size_t nent = 0;
@@ -387,7 +428,10 @@ wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
     if (f->w != f->h || f->w < 2 || (int64_t)(f->w - 1) * WM_Q > WM_LOCAL_MAX)
         return wm_fail(ctx, WM_ERR_INVALID, "contour: bad block field");
     const int32_t n = s.n, S = n * WM_Q;
+    if (probe && (st = wm_hidden_find(f, probe, &s.hid, ctx)) != WM_OK)
+        goto cleanup;
 
+    size_t hc = 0; /* the ambiguous cells of the tiles so far */
     for (int32_t ty = 0; ty < f->nty; ty++)
         for (int32_t tx = 0; tx < f->ntx; tx++)
         {
@@ -403,6 +447,9 @@ wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
                          sizeof *s.tiles))
                 goto nomem;
             const size_t s0 = s.nsegs;
+            /* ambiguous cells are done apart (cmask: per row of the tile) */
+            uint64_t cmask[WM_TILE];
+            ambiguous_of_tile(&s.hid, t, &hc, cmask);
             uint64_t below = water_bits(f->val[t]);
             for (int32_t r = r0; r < r1; r++)
             {
@@ -410,7 +457,7 @@ wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
                 const uint64_t above = water_bits(row + WM_TILE + 1);
                 uint64_t mixed = (below ^ (below >> 1)) |
                                  (above ^ (above >> 1)) | (below ^ above);
-                mixed &= (UINT64_C(1) << (c1 - c0)) - 1;
+                mixed &= ((UINT64_C(1) << (c1 - c0)) - 1) & ~cmask[r - r0];
                 while (mixed)
                 {
                     const int32_t q = __builtin_ctzll(mixed);
@@ -420,9 +467,25 @@ wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
                 }
                 below = above;
             }
+            if (s.hid.near && s.hid.near[t])
+                mark_links(&s, f, s0);
             const tilesegs ts = {s0, s.nsegs, c0, r0};
             s.tiles[s.ntiles++] = ts;
         }
+    const size_t ntileseg = s.nsegs;
+    for (size_t i = 0; i < s.hid.ncell; i++)
+    {
+        const uint64_t key = s.hid.cell[i];
+        const int64_t t = (int64_t)(key >> 32);
+        const int32_t local = (int32_t)(key & 0xffffffffu);
+        const int32_t c = (int32_t)(t % f->ntx) * WM_TILE + local % WM_TILE;
+        const int32_t r = (int32_t)(t / f->ntx) * WM_TILE + local / WM_TILE;
+        s.cur_c = c;
+        s.cur_r = r;
+        if ((st = wm_hidden_cell(f, probe, &s.hid, c, r, push_ambiguous, &s)) !=
+            WM_OK)
+            goto nomem;
+    }
 
     if (s.nsegs >= NO_SEG)
         goto nomem; /* links need 32 bits */
@@ -434,6 +497,8 @@ wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
      * first segment, across tiles through a hash of the segments entering
      * over a tile side */
     size_t nbnd = link_tiles(&s, bnd);
+    for (size_t i = ntileseg; i < s.nsegs; i++)
+        bnd[nbnd++] = i;
     size_t hcap = 16;
     while (hcap < 2 * nbnd + 2)
         hcap *= 2;
@@ -447,7 +512,7 @@ wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
         const size_t i = bnd[b];
         if (!crosses_tile(&s, i, 1))
             continue;
-        size_t h = hash64(in_id(&s, &s.segs[i]), hcap - 1);
+        size_t h = hash64(pt_key(s.segs[i].in_pt), hcap - 1);
         while (slot[h] != SIZE_MAX)
             h = (h + 1) & (hcap - 1);
         slot[h] = i;
@@ -457,11 +522,11 @@ wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
         const size_t i = bnd[b];
         if (!crosses_tile(&s, i, 0))
             continue;
-        const uint64_t key = out_id(&s, &s.segs[i]);
+        const uint64_t key = pt_key(s.segs[i].out_pt);
         size_t h = hash64(key, hcap - 1);
         while (slot[h] != SIZE_MAX)
         {
-            if (in_id(&s, &s.segs[slot[h]]) == key)
+            if (pt_key(s.segs[slot[h]].in_pt) == key)
             {
                 s.segs[i].next = (uint32_t)slot[h];
                 s.segs[slot[h]].flags |= HAS_PRED;
@@ -496,6 +561,11 @@ wm_status wm_contour_extract_probed(const wm_field *f, const wm_probe *probe,
             size_t last = g;
             for (; g != NO_SEG; g = s.segs[g].next)
             {
+                if (s.segs[g].flags & USED)
+                {
+                    st = wm_fail(ctx, WM_ERR_INTERNAL, "contour: chain loops");
+                    goto cleanup;
+                }
                 s.segs[g].flags |= USED;
                 last = g;
                 if (wm_rings_push(out, s.segs[g].out_pt) != WM_OK)
@@ -564,6 +634,7 @@ nomem:
 cleanup:
     free(s.segs);
     free(s.tiles);
+    wm_hidden_free(&s.hid);
     free(bnd);
     free(slot);
     free(ent);

@@ -34,9 +34,17 @@ extern "C"
      * centre, from `probe` (the block's; NULL: the mean of the four corner
      * values, as wm_contour_extract does).
      */
-    wm_status wm_contour_extract_probed(const wm_field *f,
-                                        const wm_probe *probe, wm_rings *out,
-                                        const wm_ctx *ctx);
+    wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
+                                        wm_rings *out, const wm_ctx *ctx);
+
+    /**
+     * The crossing contour.c puts on the cell edge from the sample at
+     * lattice (x, y) (value va) to the next one along x (vertical == 0) or y
+     * (value vb), which differ in class: the linear interpolation from the
+     * first sample, rounded and clamped to offsets 1 .. WM_Q - 1.
+     */
+    wm_pt wm_contour_crossing(float va, float vb, int32_t x, int32_t y,
+                              int vertical);
 
     /**
      * The ring edge wm_contour_extract makes in cell (c, r) of the field

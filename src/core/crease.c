@@ -227,7 +227,7 @@ static void prim_box(const prim *p, double *b)
  * half a pixel of that boundary.
  * Rejects corners of inputs the sampling missed altogether (a lake smaller
  * than a pixel), which would otherwise become spikes. */
-static int follows_boundary(const wm_probe *in, wm_pt a, wm_pt c, wm_pt b)
+static int follows_boundary(wm_probe *in, wm_pt a, wm_pt c, wm_pt b)
 {
     const double reach = 4.0 * WM_Q;
     for (int e = 0; e < 2; e++)
@@ -501,9 +501,8 @@ static int check_fn(void *arg, size_t k)
 
 /* 1 when c may be inserted into edge ka (to its successor) of the current
  * rings (see the file comment, step 4), 0 when not, -1 out of memory. */
-static int can_insert(const wm_probe *in, ringgrid *g, size_t ka, wm_pt c,
-                      int32_t S, const uint8_t *split, const insertion *ins,
-                      size_t nins)
+static int can_insert(wm_probe *in, ringgrid *g, size_t ka, wm_pt c, int32_t S,
+                      const uint8_t *split, const insertion *ins, size_t nins)
 {
     const wm_rings *rings = g->r;
     const size_t kb = succ(rings, g->ring_of, ka);
@@ -630,7 +629,7 @@ static int cmp_key(const void *a, const void *b)
  * inserted, only those in them), updates their states and rebuilds the
  * rings with the accepted corners; *ninserted says how many. *newhot
  * receives this pass's hot cells (*nnewhot keys, caller frees). */
-static wm_status insert_pass(const wm_probe *in, wm_rings *rings, corner *cs,
+static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
                              size_t ncs, const uint64_t *hot, size_t nhot,
                              uint64_t **newhot, size_t *nnewhot,
                              size_t *ninserted)
@@ -797,7 +796,7 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
     return st;
 }
 
-wm_status wm_crease_recover_probed(const wm_probe *probe, const wm_field *f,
+wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
                                    wm_rings *rings, const wm_ctx *ctx)
 {
     wm_status st = WM_OK;
@@ -809,21 +808,22 @@ wm_status wm_crease_recover_probed(const wm_probe *probe, const wm_field *f,
     wm_pt *cand = NULL; /* primitive crossings, then the kept ones */
     corner *cs = NULL;
     size_t ncand = 0, candcap = 0, nkept = 0;
-    const wm_probe in = *probe; /* read only */
-    const wm_scene *s = in.s;
+    wm_probe *in = probe;
+    const wm_scene *s = in->s;
 
-    if (rings->nrings == 0 || in.nsegs + in.npolys < 1)
+    if (rings->nrings == 0 || in->nsegs + in->npolys < 1)
         return WM_OK;
     const int32_t S = s->n * WM_Q;
 
     /* 1. primitives, local doubles */
     const double lo = -4.0 * WM_Q, hi = (double)S + 4.0 * WM_Q;
-    for (size_t i = 0; i < in.nsegs; i++)
+    for (size_t i = 0; i < in->nsegs; i++)
     {
-        const wm_river_seg *q = &s->segs[in.segs[i]];
-        const double ax = (double)(q->ax - in.X0), ay = (double)(q->ay - in.Y0);
-        const double bx2 = (double)(q->bx - in.X0),
-                     by2 = (double)(q->by - in.Y0);
+        const wm_river_seg *q = &s->segs[in->segs[i]];
+        const double ax = (double)(q->ax - in->X0),
+                     ay = (double)(q->ay - in->Y0);
+        const double bx2 = (double)(q->bx - in->X0),
+                     by2 = (double)(q->by - in->Y0);
         const double dx = bx2 - ax, dy = by2 - ay, l = sqrt(dx * dx + dy * dy);
         prim p[4];
         int np = 0;
@@ -831,35 +831,35 @@ wm_status wm_crease_recover_probed(const wm_probe *probe, const wm_field *f,
         {
             const double nx = -dy / l * q->r, ny = dx / l * q->r;
             p[np++] =
-                (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, in.segs[i]};
+                (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, in->segs[i]};
             p[np++] =
-                (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, in.segs[i]};
+                (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, in->segs[i]};
         }
         /* end circles, each once: the start circle of a segment that
          * continues the previous one (same vertex, same radius) is that
          * one's end circle, which then belongs to neither (it pairs with
          * the primitives of both, as the two copies did) */
-        const wm_river_seg *prev = i > 0 ? &s->segs[in.segs[i - 1]] : NULL;
+        const wm_river_seg *prev = i > 0 ? &s->segs[in->segs[i - 1]] : NULL;
         if (prev && prev->bx == q->ax && prev->by == q->ay && prev->r == q->r)
             pr[npr - 1].item = NO_ITEM;
         else
-            p[np++] = (prim){ax, ay, q->r, 0, 1, in.segs[i]};
+            p[np++] = (prim){ax, ay, q->r, 0, 1, in->segs[i]};
         if (l > 0)
-            p[np++] = (prim){bx2, by2, q->r, 0, 1, in.segs[i]};
+            p[np++] = (prim){bx2, by2, q->r, 0, 1, in->segs[i]};
         for (int k = 0; k < np; k++)
             if (!push((void **)&pr, &npr, &prcap, &p[k], sizeof *p))
                 goto nomem;
     }
-    for (size_t k = 0; k < in.npolys; k++)
+    for (size_t k = 0; k < in->npolys; k++)
     {
-        const uint32_t pidx = in.polys[k];
+        const uint32_t pidx = in->polys[k];
         for (size_t e = s->poly_start[pidx]; e < s->poly_start[pidx + 1]; e++)
         {
             const wm_lake_edge *q = &s->edges[e];
-            prim p = {(double)(q->ax - in.X0),
-                      (double)(q->ay - in.Y0),
-                      (double)(q->bx - in.X0),
-                      (double)(q->by - in.Y0),
+            prim p = {(double)(q->ax - in->X0),
+                      (double)(q->ay - in->Y0),
+                      (double)(q->bx - in->X0),
+                      (double)(q->by - in->Y0),
                       0,
                       (uint32_t)(s->nsegs + e)};
             double b[4];
@@ -995,7 +995,7 @@ wm_status wm_crease_recover_probed(const wm_probe *probe, const wm_field *f,
     {
         size_t n = 0, nnext = 0;
         uint64_t *next = NULL;
-        st = insert_pass(&in, rings, cs, ncand, pass ? hot : NULL, nhot, &next,
+        st = insert_pass(in, rings, cs, ncand, pass ? hot : NULL, nhot, &next,
                          &nnext, &n);
         free(hot);
         hot = next;

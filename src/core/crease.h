@@ -41,7 +41,7 @@ extern "C"
      * wm_crease_recover with the block's probe already set up (the block
      * is the probe's).
      */
-    wm_status wm_crease_recover_probed(const wm_probe *probe, const wm_field *f,
+    wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
                                        wm_rings *rings, const wm_ctx *ctx);
 
 #ifdef __cplusplus

@@ -5,13 +5,25 @@
  * Method: the minimum over the river segments within reach (from a grid of
  * 16-pixel cells over the block) of |p - segment| - radius, and over the
  * block's lake polygons of +-|p - nearest edge| (negative inside, even-odd
- * by a ray crossing count), as the field defines a sample (field.c).
- * Cost: the segments of the point's cell plus every edge of the lake
- * polygons whose box is within reach; building the index is O(segments x
- * cells they reach).
- * Robustness: double precision from block-local coordinates; the result
- * chooses (which corner to try, which way a saddle goes), it never decides
- * validity, which stays with the exact predicates of lattice.h.
+ * by a ray crossing count), as the field defines a sample (field.c). The
+ * lake edges are indexed twice: by 16-pixel cell for the distances, and by
+ * band of 4 sample rows for the ray (an edge in every band its half-open y
+ * range meets), so a query costs the items near the point plus the edges
+ * its row crosses, never a whole lake.
+ * wm_probe_crossings finds the crossings of the union's boundary with an
+ * axis-aligned segment exactly: the interval of the segment's line inside
+ * each capsule near it (its two end discs and the rectangle between them),
+ * and for each lake polygon the pieces between its edges' crossings, each
+ * classed by the exact ray rule at a lattice point inside it; the union of
+ * the water intervals gives the crossings.
+ * Cost: building the indexes is O(segments x cells they reach + lake edges
+ * x bands they span); a query as above.
+ * Robustness: a point with integer coordinates gets its ray test in exact
+ * integer arithmetic, and every difference of coordinates is formed from
+ * integers before floating point, so a query's result is a pure function
+ * of the point's global position and the inputs, whichever block asks. The
+ * distances choose (which corner to try, which way a saddle goes); validity
+ * stays with the exact predicates of lattice.h.
  */
 #include "probe.h"
 
@@ -19,11 +31,25 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Cells of the river index, and the reach it serves (union_distance is
- * always asked for at most DREACH). */
+struct wm_probe_edge
+{
+    uint32_t e; /* index into scene->edges */
+    uint32_t k; /* polygon slot: index into the probe's polys */
+};
+
+struct wm_probe_toggle
+{
+    double t;   /* where an edge of polygon k crosses the segment */
+    uint32_t k; /* polygon slot */
+};
+
+/* Cells of the item indexes, and the reach they serve (queries ask for at
+ * most DREACH). */
 #define DCELL (16 * WM_Q)
 #define DREACH WM_PROBE_REACH
 #define WIDE 1024
+/* Height of a band of the ray index: 4 sample rows. */
+#define RBAND (4 * WM_Q)
 
 /* Index cell (clamped to the block) of the local coordinate v. */
 static int32_t dcell(const wm_probe *in, double v)
@@ -33,14 +59,43 @@ static int32_t dcell(const wm_probe *in, double v)
     return c < 0 ? 0 : (c > side - 1 ? side - 1 : (int32_t)c);
 }
 
-/* Local box of river segment g grown by its radius + DREACH. */
-static void seg_reach_box(const wm_probe *in, const wm_river_seg *g, double *b)
+/* Band (clamped) of the ray index holding local y. */
+static int32_t rband(const wm_probe *in, double y)
 {
-    const double m = g->r + DREACH;
-    b[0] = (double)((g->ax < g->bx ? g->ax : g->bx) - in->X0) - m;
-    b[1] = (double)((g->ay < g->by ? g->ay : g->by) - in->Y0) - m;
-    b[2] = (double)((g->ax > g->bx ? g->ax : g->bx) - in->X0) + m;
-    b[3] = (double)((g->ay > g->by ? g->ay : g->by) - in->Y0) + m;
+    const double c = floor(y / RBAND);
+    const int32_t side = in->lrows.side;
+    return c < 0 ? 0 : (c > side - 1 ? side - 1 : (int32_t)c);
+}
+
+/* Local box of segment (a, b) grown by m. */
+static void reach_box(const wm_probe *in, int64_t ax, int64_t ay, int64_t bx,
+                      int64_t by, double m, double *b)
+{
+    b[0] = (double)((ax < bx ? ax : bx) - in->X0) - m;
+    b[1] = (double)((ay < by ? ay : by) - in->Y0) - m;
+    b[2] = (double)((ax > bx ? ax : bx) - in->X0) + m;
+    b[3] = (double)((ay > by ? ay : by) - in->Y0) + m;
+}
+
+/* Registers item in the cells of g its local box b touches, or in wide[]
+ * when that is more than WIDE cells. Returns 0 when out of memory. */
+static int register_box(const wm_probe *in, wm_cells *g, const double *b,
+                        int32_t S, uint32_t item, uint32_t *wide, size_t *nwide)
+{
+    if (b[2] < 0 || b[3] < 0 || b[0] > S || b[1] > S)
+        return 1; /* never within reach of the block */
+    const int32_t x0 = dcell(in, b[0]), x1 = dcell(in, b[2]);
+    const int32_t y0 = dcell(in, b[1]), y1 = dcell(in, b[3]);
+    if ((int64_t)(x1 - x0 + 1) * (y1 - y0 + 1) > WIDE)
+    {
+        wide[(*nwide)++] = item;
+        return 1;
+    }
+    for (int32_t cy = y0; cy <= y1; cy++)
+        for (int32_t cx = x0; cx <= x1; cx++)
+            if (!wm_cells_add(g, cx, cy, item))
+                return 0;
+    return 1;
 }
 
 static wm_status build_river_index(wm_probe *in, int32_t S)
@@ -49,57 +104,142 @@ static wm_status build_river_index(wm_probe *in, int32_t S)
     in->wide = malloc((in->nsegs + 1) * sizeof *in->wide);
     if (!in->wide)
         return WM_ERR_NOMEM;
-    in->nwide = 0;
     for (size_t i = 0; i < in->nsegs; i++)
     {
+        const wm_river_seg *g = &in->s->segs[in->segs[i]];
         double b[4];
-        int32_t x0, x1, y0, y1;
-        seg_reach_box(in, &in->s->segs[in->segs[i]], b);
-        if (b[2] < 0 || b[3] < 0 || b[0] > S || b[1] > S)
-            continue; /* never within reach of the block */
-        x0 = dcell(in, b[0]);
-        x1 = dcell(in, b[2]);
-        y0 = dcell(in, b[1]);
-        y1 = dcell(in, b[3]);
-        if ((int64_t)(x1 - x0 + 1) * (y1 - y0 + 1) > WIDE)
-        {
-            in->wide[in->nwide++] = in->segs[i];
-            continue;
-        }
-        for (int32_t cy = y0; cy <= y1; cy++)
-            for (int32_t cx = x0; cx <= x1; cx++)
-                if (!wm_cells_add(&in->cells, cx, cy, in->segs[i]))
-                    return WM_ERR_NOMEM;
+        reach_box(in, g->ax, g->ay, g->bx, g->by, g->r + DREACH, b);
+        if (!register_box(in, &in->cells, b, S, in->segs[i], in->wide,
+                          &in->nwide))
+            return WM_ERR_NOMEM;
     }
     return wm_cells_index(&in->cells);
 }
 
-/* Distance from (x, y) (block-local, double) to segment (global ends). */
+static wm_status build_lake_index(wm_probe *in, int32_t S)
+{
+    const wm_scene *s = in->s;
+    size_t n = 0;
+    for (size_t k = 0; k < in->npolys; k++)
+        n += s->poly_start[in->polys[k] + 1] - s->poly_start[in->polys[k]];
+    if (n >= UINT32_MAX)
+        return WM_ERR_NOMEM; /* items are 32-bit */
+    in->ledge = malloc((n + 1) * sizeof *in->ledge);
+    in->lwide = malloc((n + 1) * sizeof *in->lwide);
+    in->par = calloc(in->npolys + 1, 1);
+    in->dmin = malloc((in->npolys + 1) * sizeof *in->dmin);
+    in->touched = malloc((in->npolys + 1) * sizeof *in->touched);
+    if (!in->ledge || !in->lwide || !in->par || !in->dmin || !in->touched)
+        return WM_ERR_NOMEM;
+    wm_cells_reset(&in->lcells, S / DCELL + 1);
+    wm_cells_reset(&in->lrows, S / RBAND + 1);
+    const int32_t nb = in->lrows.side;
+    for (size_t k = 0; k < in->npolys; k++)
+    {
+        const uint32_t p = in->polys[k];
+        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
+        {
+            const wm_lake_edge *g = &s->edges[e];
+            const uint32_t j = (uint32_t)in->nledge++;
+            in->ledge[j] = (struct wm_probe_edge){(uint32_t)e, (uint32_t)k};
+            double b[4];
+            reach_box(in, g->ax, g->ay, g->bx, g->by, DREACH, b);
+            if (!register_box(in, &in->lcells, b, S, j, in->lwide, &in->nlwide))
+                return WM_ERR_NOMEM;
+            if (g->ay == g->by)
+                continue; /* never crosses a ray */
+            /* bands met by the half-open range [y0, y1) */
+            const int64_t y0 = (g->ay < g->by ? g->ay : g->by) - in->Y0;
+            const int64_t y1 = (g->ay > g->by ? g->ay : g->by) - in->Y0;
+            if (y1 <= 0 || y0 > S)
+                continue;
+            int64_t b0 = wm_floordiv(y0, RBAND),
+                    b1 = wm_floordiv(y1 - 1, RBAND);
+            b0 = b0 < 0 ? 0 : b0;
+            b1 = b1 > nb - 1 ? nb - 1 : b1;
+            for (int64_t r = b0; r <= b1; r++)
+                if (!wm_cells_add(&in->lrows, 0, (int32_t)r, j))
+                    return WM_ERR_NOMEM;
+        }
+    }
+    if (wm_cells_index(&in->lcells) != WM_OK)
+        return WM_ERR_NOMEM;
+    return wm_cells_index(&in->lrows);
+}
+
+/* Distance from (x, y) (block-local, double) to segment (global ends);
+ * differences of coordinates are formed before any rounding. */
 static double seg_dist(const wm_probe *in, int64_t ax, int64_t ay, int64_t bx,
                        int64_t by, double x, double y)
 {
-    const double x0 = (double)(ax - in->X0), y0 = (double)(ay - in->Y0);
+    const double px = x - (double)(ax - in->X0), py = y - (double)(ay - in->Y0);
     const double dx = (double)(bx - ax), dy = (double)(by - ay);
     const double l2 = dx * dx + dy * dy;
-    double t = l2 > 0 ? ((x - x0) * dx + (y - y0) * dy) / l2 : 0;
+    double t = l2 > 0 ? (px * dx + py * dy) / l2 : 0;
     t = t < 0 ? 0 : (t > 1 ? 1 : t);
-    const double ex = x - (x0 + t * dx), ey = y - (y0 + t * dy);
+    const double ex = px - t * dx, ey = py - t * dy;
     return sqrt(ex * ex + ey * ey);
 }
 
-/* Signed distance (lattice units, negative in water) from (x, y) to the
- * union of the block's inputs, in double precision; inputs farther than
- * `reach` (<= DREACH) are ignored (the result is then +reach or more).
- * (x, y) lies in the block square. */
-double wm_probe_distance(const wm_probe *in, double x, double y, double reach)
+/* Whether the ray from (x, y) towards +x crosses lake edge g (half-open
+ * rule on y: vertices on the ray count once, horizontal edges never).
+ * Exact when (x, y) is a lattice point. */
+static int ray_crosses(const wm_probe *in, const wm_lake_edge *g, double x,
+                       double y)
+{
+    if (x == floor(x) && y == floor(y) && fabs(x) < 0x1p52 && fabs(y) < 0x1p52)
+    {
+        const int64_t gx = (int64_t)x + in->X0, gy = (int64_t)y + in->Y0;
+        if ((g->ay > gy) == (g->by > gy))
+            return 0;
+        const int64_t dy = g->by - g->ay;
+        const wm_i128 lhs = (wm_i128)(gx - g->ax) * dy;
+        const wm_i128 rhs = (wm_i128)(gy - g->ay) * (g->bx - g->ax);
+        return dy > 0 ? lhs < rhs : lhs > rhs;
+    }
+    const double ay = (double)(g->ay - in->Y0), by = (double)(g->by - in->Y0);
+    if ((ay > y) == (by > y))
+        return 0;
+    const double px = x - (double)(g->ax - in->X0);
+    return px < (y - ay) * (double)(g->bx - g->ax) / (by - ay);
+}
+
+/* Marks polygon slot k touched by the current query. */
+static void touch(wm_probe *in, uint32_t k, size_t *nt, double reach)
+{
+    if (in->par[k] & 2)
+        return;
+    in->par[k] = 2;
+    in->dmin[k] = reach;
+    in->touched[(*nt)++] = k;
+}
+
+/* Per polygon slot near (x, y): parity (bit 0 of par[]) by the ray index. */
+static size_t lake_parities(wm_probe *in, double x, double y, double reach)
+{
+    size_t nt = 0, b, e;
+    wm_cells_row(&in->lrows, rband(in, y), 0, 0, &b, &e);
+    for (size_t i = b; i < e; i++)
+    {
+        const struct wm_probe_edge *le = &in->ledge[in->lrows.item[i]];
+        if (ray_crosses(in, &in->s->edges[le->e], x, y))
+        {
+            touch(in, le->k, &nt, reach);
+            in->par[le->k] ^= 1;
+        }
+    }
+    return nt;
+}
+
+double wm_probe_distance(wm_probe *in, double x, double y, double reach)
 {
     const wm_scene *s = in->s;
     double d = reach;
     const double gx = x + (double)in->X0, gy = y + (double)in->Y0;
     /* the segments within reach are in the point's cell, or wide */
     size_t c0, c1;
-    const int32_t cx = dcell(in, x);
-    wm_cells_row(&in->cells, dcell(in, y), cx, cx, &c0, &c1);
+    const int32_t cx = dcell(in, x), cy = dcell(in, y);
+    wm_cells_row(&in->cells, cy, cx, cx, &c0, &c1);
     const size_t n0 = c1 - c0;
     for (size_t i = 0; i < n0 + in->nwide; i++)
     {
@@ -114,34 +254,358 @@ double wm_probe_distance(const wm_probe *in, double x, double y, double reach)
         const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y) - g->r;
         d = v < d ? v : d;
     }
-    for (size_t k = 0; k < in->npolys; k++)
+    if (in->nledge == 0)
+        return d;
+    size_t nt = lake_parities(in, x, y, reach);
+    wm_cells_row(&in->lcells, cy, cx, cx, &c0, &c1);
+    const size_t m0 = c1 - c0;
+    for (size_t i = 0; i < m0 + in->nlwide; i++)
     {
-        const uint32_t p = in->polys[k];
-        const wm_box b = s->poly_box[p];
-        if (gx < (double)b.x0 - reach || gx > (double)b.x1 + reach ||
-            gy < (double)b.y0 - reach || gy > (double)b.y1 + reach)
+        const struct wm_probe_edge *le =
+            &in->ledge[i < m0 ? in->lcells.item[c0 + i] : in->lwide[i - m0]];
+        const wm_lake_edge *g = &s->edges[le->e];
+        if (gx < (double)(g->ax < g->bx ? g->ax : g->bx) - reach ||
+            gx > (double)(g->ax > g->bx ? g->ax : g->bx) + reach ||
+            gy < (double)(g->ay < g->by ? g->ay : g->by) - reach ||
+            gy > (double)(g->ay > g->by ? g->ay : g->by) + reach)
             continue;
-        int inside = 0;
-        double dmin = INFINITY;
-        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
-        {
-            const wm_lake_edge *g = &s->edges[e];
-            const double ay = (double)(g->ay - in->Y0);
-            const double by = (double)(g->by - in->Y0);
-            if ((ay > y) != (by > y))
-            {
-                const double ax = (double)(g->ax - in->X0);
-                const double bxx = (double)(g->bx - in->X0);
-                if (x < ax + (y - ay) * (bxx - ax) / (by - ay))
-                    inside = !inside;
-            }
-            const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y);
-            dmin = v < dmin ? v : dmin;
-        }
-        const double v = inside ? -dmin : dmin;
+        touch(in, le->k, &nt, reach);
+        const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y);
+        in->dmin[le->k] = v < in->dmin[le->k] ? v : in->dmin[le->k];
+    }
+    for (size_t i = 0; i < nt; i++)
+    {
+        const uint32_t k = in->touched[i];
+        const double v = (in->par[k] & 1) ? -in->dmin[k] : in->dmin[k];
         d = v < d ? v : d;
+        in->par[k] = 0;
     }
     return d;
+}
+
+/* ---- crossings of a segment ------------------------------------------- */
+
+/* Appends the water interval [lo, hi] clipped to [0, L]. */
+static int add_interval(wm_probe *in, size_t *n, double lo, double hi,
+                        int32_t L)
+{
+    lo = lo < 0 ? 0 : lo;
+    hi = hi > L ? L : hi;
+    if (!(lo <= hi))
+        return 1;
+    if (!wm_grow((void **)&in->iv, &in->ivcap, 2 * (*n + 1), sizeof *in->iv))
+        return 0;
+    in->iv[2 * *n] = lo;
+    in->iv[2 * *n + 1] = hi;
+    (*n)++;
+    return 1;
+}
+
+/* The t-range where alpha * t + beta lies in [lo, hi] intersected with
+ * [*t0, *t1]. */
+static void clip_linear(double alpha, double beta, double lo, double hi,
+                        double *t0, double *t1)
+{
+    if (alpha == 0)
+    {
+        if (beta < lo || beta > hi)
+            *t1 = -INFINITY;
+        return;
+    }
+    double a = (lo - beta) / alpha, b = (hi - beta) / alpha;
+    if (a > b)
+    {
+        const double c = a;
+        a = b;
+        b = c;
+    }
+    *t0 = a > *t0 ? a : *t0;
+    *t1 = b < *t1 ? b : *t1;
+}
+
+/* The interval of the line G + t u (u the unit vector of the axis) inside
+ * the capsule of g, as [*lo, *hi]; returns 0 when the line misses it. */
+static int capsule_interval(const wm_river_seg *g, int64_t Gx, int64_t Gy,
+                            int vertical, double *lo, double *hi)
+{
+    /* coordinates relative to G, axis first */
+    const double ax = (double)(vertical ? g->ay - Gy : g->ax - Gx);
+    const double ay = (double)(vertical ? g->ax - Gx : g->ay - Gy);
+    const double bx = (double)(vertical ? g->by - Gy : g->bx - Gx);
+    const double by = (double)(vertical ? g->bx - Gx : g->by - Gy);
+    const double r = g->r;
+    *lo = INFINITY;
+    *hi = -INFINITY;
+    /* end discs: (t - ax)^2 + ay^2 <= r^2 */
+    const double e[2][2] = {{ax, ay}, {bx, by}};
+    for (int k = 0; k < 2; k++)
+    {
+        const double h2 = r * r - e[k][1] * e[k][1];
+        if (h2 < 0)
+            continue;
+        const double h = sqrt(h2);
+        *lo = fmin(*lo, e[k][0] - h);
+        *hi = fmax(*hi, e[k][0] + h);
+    }
+    /* the rectangle: 0 <= (p - a).d <= |d|^2, |d x (p - a)| <= r |d| */
+    const double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy;
+    if (l2 > 0)
+    {
+        double t0 = -INFINITY, t1 = INFINITY;
+        /* p = (t, 0): (p - a).d = t dx - (ax dx + ay dy) */
+        clip_linear(dx, -(ax * dx + ay * dy), 0, l2, &t0, &t1);
+        /* d x (p - a) = dx (0 - ay) - dy (t - ax) */
+        const double rl = r * sqrt(l2);
+        clip_linear(-dy, -dx * ay + dy * ax, -rl, rl, &t0, &t1);
+        if (t0 <= t1)
+        {
+            *lo = fmin(*lo, t0);
+            *hi = fmax(*hi, t1);
+        }
+    }
+    return *lo <= *hi;
+}
+
+static int cmp_toggle(const void *a, const void *b)
+{
+    const struct wm_probe_toggle *x = a, *y = b;
+    if (x->k != y->k)
+        return x->k < y->k ? -1 : 1;
+    return (x->t > y->t) - (x->t < y->t);
+}
+
+static int cmp_interval(const void *a, const void *b)
+{
+    const double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* Where lake edge g crosses the segment's line (the half-open rule across
+ * the line), as t; returns 0 when it does not. */
+static int edge_toggle(const wm_lake_edge *g, int64_t Gx, int64_t Gy,
+                       int vertical, double *t)
+{
+    /* along the axis: u; across: w (the line is w == 0) */
+    const int64_t au = vertical ? g->ay - Gy : g->ax - Gx;
+    const int64_t aw = vertical ? g->ax - Gx : g->ay - Gy;
+    const int64_t bu = vertical ? g->by - Gy : g->bx - Gx;
+    const int64_t bw = vertical ? g->bx - Gx : g->by - Gy;
+    if ((aw > 0) == (bw > 0))
+        return 0;
+    const wm_i128 num = (wm_i128)(0 - aw) * (bu - au);
+    *t = (double)au + (double)num / (double)(bw - aw);
+    return 1;
+}
+
+/* Gathers into in->tg where the lake edges near the segment cross it
+ * (inside it); returns how many, or -1 when out of memory. */
+static long lake_toggles(wm_probe *in, int64_t Gx, int64_t Gy, wm_pt P,
+                         int vertical, int32_t L)
+{
+    const wm_scene *s = in->s;
+    const double mx = P.x + (vertical ? 0 : L / 2.0);
+    const double my = P.y + (vertical ? L / 2.0 : 0);
+    size_t c0, c1, ntg = 0;
+    const int32_t cx = dcell(in, mx), cy = dcell(in, my);
+    wm_cells_row(&in->lcells, cy, cx, cx, &c0, &c1);
+    const size_t m0 = c1 - c0;
+    for (size_t i = 0; i < m0 + in->nlwide; i++)
+    {
+        const struct wm_probe_edge *le =
+            &in->ledge[i < m0 ? in->lcells.item[c0 + i] : in->lwide[i - m0]];
+        double t;
+        if (!edge_toggle(&s->edges[le->e], Gx, Gy, vertical, &t) ||
+            !(t > 0 && t < L))
+            continue;
+        if (!wm_grow((void **)&in->tg, &in->tgcap, ntg + 1, sizeof *in->tg))
+            return -1;
+        in->tg[ntg++] = (struct wm_probe_toggle){t, le->k};
+    }
+    return (long)ntg;
+}
+
+/* Appends the water intervals of the lake polygons along the segment,
+ * given their ntg toggles in in->tg. */
+static int lake_intervals(wm_probe *in, wm_pt P, int vertical, int32_t L,
+                          size_t ntg, size_t *niv)
+{
+    const wm_scene *s = in->s;
+    qsort(in->tg, ntg, sizeof *in->tg, cmp_toggle);
+    /* every polygon odd at P (the ray) or toggling inside: its pieces */
+    size_t nt = lake_parities(in, P.x, P.y, 0);
+    for (size_t i = 0; i < ntg; i++)
+        touch(in, in->tg[i].k, &nt, 0);
+    /* in slot order, as the toggles */
+    for (size_t i = 1; i < nt; i++)
+        for (size_t q = i; q > 0 && in->touched[q - 1] > in->touched[q]; q--)
+        {
+            const uint32_t x = in->touched[q];
+            in->touched[q] = in->touched[q - 1];
+            in->touched[q - 1] = x;
+        }
+    size_t j = 0;
+    for (size_t q = 0; q < nt; q++)
+    {
+        const uint32_t k = in->touched[q];
+        /* polygon k's toggles: tg[j0 .. j1) (sorted by slot) */
+        while (j < ntg && in->tg[j].k < k)
+            j++;
+        size_t j1 = j;
+        while (j1 < ntg && in->tg[j1].k == k)
+            j1++;
+        double from = 0;
+        int odd = in->par[k] & 1;
+        for (size_t i = j; i <= j1; i++)
+        {
+            const double to = i < j1 ? in->tg[i].t : L;
+            if (i > j)
+            {
+                /* the piece's class by the exact ray rule at a lattice
+                 * point inside it; a piece with none is too thin to tell
+                 * and keeps the class before it */
+                const double c = ceil(from), f = floor(to);
+                if (c <= f && c > 0 && c < L)
+                {
+                    const double t = floor((c + f) / 2);
+                    const double x = P.x + (vertical ? 0 : t);
+                    const double y = P.y + (vertical ? t : 0);
+                    odd = 0;
+                    size_t b, e;
+                    wm_cells_row(&in->lrows, rband(in, y), 0, 0, &b, &e);
+                    for (size_t r = b; r < e; r++)
+                    {
+                        const struct wm_probe_edge *le =
+                            &in->ledge[in->lrows.item[r]];
+                        if (le->k == k &&
+                            ray_crosses(in, &s->edges[le->e], x, y))
+                            odd ^= 1;
+                    }
+                }
+            }
+            if (odd && !add_interval(in, niv, from, to, L))
+                return 0;
+            from = to;
+        }
+        j = j1;
+        in->par[k] = 0;
+    }
+    return 1;
+}
+
+int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
+                       int *cls1, int32_t *off, int max)
+{
+    const wm_scene *s = in->s;
+    const int64_t Gx = (int64_t)P.x + in->X0, Gy = (int64_t)P.y + in->Y0;
+    size_t niv = 0;
+    /* rivers: the capsules of the midpoint's cell (any capsule meeting the
+     * segment is within half of it from the midpoint, so registered) */
+    const double mx = P.x + (vertical ? 0 : L / 2.0);
+    const double my = P.y + (vertical ? L / 2.0 : 0);
+    size_t c0, c1;
+    int inside = 0; /* an input's boundary crosses the segment */
+    const int32_t cx = dcell(in, mx), cy = dcell(in, my);
+    wm_cells_row(&in->cells, cy, cx, cx, &c0, &c1);
+    const size_t n0 = c1 - c0;
+    for (size_t i = 0; i < n0 + in->nwide; i++)
+    {
+        const wm_river_seg *g =
+            &s->segs[i < n0 ? in->cells.item[c0 + i] : in->wide[i - n0]];
+        double lo, hi;
+        /* the capsule's box against the segment's */
+        const double m = g->r;
+        if ((double)((g->ax < g->bx ? g->ax : g->bx) - Gx) - m >
+                (vertical ? 0 : L) ||
+            (double)((g->ax > g->bx ? g->ax : g->bx) - Gx) + m < 0 ||
+            (double)((g->ay < g->by ? g->ay : g->by) - Gy) - m >
+                (vertical ? L : 0) ||
+            (double)((g->ay > g->by ? g->ay : g->by) - Gy) + m < 0)
+            continue;
+        if (!capsule_interval(g, Gx, Gy, vertical, &lo, &hi))
+            continue;
+        inside |= (lo > 0 && lo < L) || (hi > 0 && hi < L);
+        if (!add_interval(in, &niv, lo, hi, L))
+            return -1;
+    }
+    const long ntg = in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L) : 0;
+    if (ntg < 0)
+        return -1;
+    if (!inside && ntg == 0 && (*cls1 < 0 || *cls1 == cls0))
+    {
+        /* every input's membership is constant along the segment */
+        if (*cls1 < 0)
+            *cls1 = cls0;
+        return 0;
+    }
+    if (ntg || in->nledge)
+        if (!lake_intervals(in, P, vertical, L, (size_t)ntg, &niv))
+            return -1;
+    qsort(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
+    /* the union's boundaries, rounded, normalized against the ends'
+     * classes: a boundary that does not change the class (rounding at an
+     * end) is skipped, two on one lattice point cancel */
+    int n = 0, cur = cls0;
+    double reach = -INFINITY; /* right end of the union so far */
+    double last = 0;          /* unrounded position of off[n - 1] */
+    for (size_t i = 0; i <= niv; i++)
+    {
+        /* boundaries: the end of the union so far when the next interval
+         * starts beyond it, and that start */
+        const double lo = i < niv ? in->iv[2 * i] : INFINITY;
+        const double hi = i < niv ? in->iv[2 * i + 1] : INFINITY;
+        double b[2];
+        int nb = 0;
+        if (lo > reach)
+        {
+            if (reach > -INFINITY)
+                b[nb++] = reach; /* water -> land */
+            if (lo < INFINITY)
+                b[nb++] = lo; /* land -> water */
+        }
+        reach = fmax(reach, hi);
+        for (int k = 0; k < nb; k++)
+        {
+            const int after = (nb == 2 && k == 1) || (nb == 1 && b[0] == lo);
+            /* water is closed: a boundary through an end sample is a
+             * crossing only when the water is on the other side of it,
+             * then next to the sample, where interpolation puts it */
+            if (!(after ? b[k] > 0 && b[k] <= L : b[k] >= 0 && b[k] < L) ||
+                after == cur)
+                continue;
+            /* rounded, kept off the ends */
+            double o = floor(b[k] + 0.5);
+            o = o < 1 ? 1 : (o > L - 1 ? L - 1 : o);
+            if (n > 0 && o <= off[n - 1])
+            {
+                /* a feature narrower than a lattice unit: kept one unit
+                 * wide when it is at least half a unit (a thin strip stays
+                 * whole), else it cancels the previous crossing (rounding,
+                 * or two inputs that share a boundary) */
+                o = off[n - 1] + 1;
+                if (b[k] - last < 0.5 || o > L - 1)
+                {
+                    n--;
+                    cur = after;
+                    continue;
+                }
+            }
+            if (n == max)
+                continue;
+            off[n++] = (int32_t)o;
+            last = b[k];
+            cur = after;
+        }
+    }
+    if (*cls1 < 0)
+        *cls1 = cur;
+    else if (cur != *cls1)
+    {
+        if (n > 0)
+            n--;
+        else if (L >= 2 && max > 0)
+            off[n++] = L / 2;
+    }
+    return n;
 }
 
 wm_status wm_probe_init(wm_probe *p, const wm_scene *s, int64_t bx, int64_t by)
@@ -159,7 +623,8 @@ wm_status wm_probe_init(wm_probe *p, const wm_scene *s, int64_t bx, int64_t by)
     p->nsegs = s->blk_seg_start[blk + 1] - s->blk_seg_start[blk];
     p->polys = s->blk_poly + s->blk_poly_start[blk];
     p->npolys = s->blk_poly_start[blk + 1] - s->blk_poly_start[blk];
-    if (build_river_index(p, S) != WM_OK)
+    if (build_river_index(p, S) != WM_OK ||
+        (p->npolys && build_lake_index(p, S) != WM_OK))
     {
         wm_probe_free(p);
         return WM_ERR_NOMEM;
@@ -172,7 +637,17 @@ void wm_probe_free(wm_probe *p)
     if (!p)
         return;
     wm_cells_free(&p->cells);
+    wm_cells_free(&p->lcells);
+    wm_cells_free(&p->lrows);
     free(p->wide);
-    p->wide = NULL;
-    p->nwide = 0;
+    free(p->ledge);
+    free(p->lwide);
+    free(p->par);
+    free(p->dmin);
+    free(p->touched);
+    free(p->iv);
+    free(p->tg);
+    const wm_scene *s = p->s;
+    memset(p, 0, sizeof *p);
+    p->s = s;
 }

@@ -19,6 +19,9 @@ extern "C"
      * The inputs in reach of one block, with an index of its river segments
      * by 16-pixel cell. Fields are read-only after wm_probe_init.
      */
+    struct wm_probe_edge;
+    struct wm_probe_toggle;
+
     typedef struct
     {
         const wm_scene *s;
@@ -33,6 +36,25 @@ extern "C"
         wm_cells cells;
         uint32_t *wide;
         size_t nwide;
+        /* lake edges of the block's polygons, built on the first query that
+         * needs them: `ledge` (owned) lists them as (edge, polygon slot k);
+         * `lcells` by cell as the rivers (within reach), `lwide` those
+         * touching too many cells, `lrows` by band of 4 sample rows (those
+         * whose half-open y range meets the band: the ray crossings) */
+        int lakes_built;
+        struct wm_probe_edge *ledge;
+        size_t nledge;
+        wm_cells lcells, lrows;
+        uint32_t *lwide;
+        size_t nlwide;
+        /* scratch of a query (owned): per polygon slot, and growable lists */
+        uint8_t *par;
+        double *dmin;
+        uint32_t *touched;
+        double *iv; /* water intervals, pairs */
+        size_t ivcap;
+        struct wm_probe_toggle *tg;
+        size_t tgcap;
     } wm_probe;
 
     /**
@@ -54,8 +76,31 @@ extern "C"
      * `reach` (<= WM_PROBE_REACH) are ignored (the result is then +reach or
      * more). Floating point: use it to choose, never to decide validity.
      */
-    double wm_probe_distance(const wm_probe *p, double x, double y,
-                             double reach);
+    double wm_probe_distance(wm_probe *p, double x, double y, double reach);
+
+    /**
+     * The crossings of the union's boundary with the open axis-aligned
+     * lattice segment from block-local P, of length L > 0 lattice units,
+     * along +x (vertical == 0) or +y, computed exactly from the inputs: the
+     * water intervals of the river capsules and of the lake polygons (even-
+     * odd, the half-open ray rule of the field) are merged. The class at P
+     * is taken as cls0 and at the far end as *cls1 (1: water), the classes
+     * the caller already gave those points (the field's, or a neighbouring
+     * segment's): a crossing the rounding puts on an end, or that disagrees
+     * with them, is dropped, and so is a pair of crossings closer than a
+     * lattice unit (a feature the lattice does not resolve). With *cls1 < 0
+     * the far end's class is the inputs', and is written to *cls1.
+     * Writes to off[] the crossings' offsets from P, strictly increasing in
+     * 1 .. L - 1, at most `max` (beyond that the list is cut to an even or
+     * odd count matching the classes), and returns how many; their count is
+     * odd exactly when cls0 != *cls1. Uses only global integer differences
+     * before floating point, so the result is a pure function of the
+     * segment's global position and the inputs: the two blocks sharing a
+     * segment of their square find the same crossings. Returns -1 when out
+     * of memory.
+     */
+    int wm_probe_crossings(wm_probe *p, wm_pt P, int vertical, int32_t L,
+                           int cls0, int *cls1, int32_t *off, int max);
 
 #ifdef __cplusplus
 }

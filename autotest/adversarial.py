@@ -1,0 +1,568 @@
+"""Seeded adversarial scenes for sub-pixel topology (issue 12).
+
+Every scene is small (a few blocks of BLOCK_SIZE = 64 m at PIXEL_SIZE =
+0.5 m, i.e. 128 x 128 samples per block) and built around one "feature of
+interest" whose exact shape the lattice cannot resolve by sampling alone:
+
+  wedge     two rivers (widths 1-6 m) sharing their start vertex and
+            diverging at 1-30 degrees, long enough that the land wedge
+            between them grows to 3.5-5 px; sometimes a wider trunk river
+            ends at the shared vertex (a confluence), sometimes the two
+            branches are one polyline (a hairpin bend); at 1 degree the rivers
+            are up to ~230 m long. The feature of
+            interest is the exact tip of the land wedge.
+  parallel  two near-parallel rivers (widths 1-8 m) whose banks leave a land
+            strip 0.01-3 px wide (log-uniform), at a random angle to the
+            grid (a quarter of them within 2 degrees of an axis); half of
+            them converge so that the strip ends in a tip (then the rivers
+            overlap past it), a quarter of the others are closed by two
+            cross rivers so the strip becomes a long thin island (a hole).
+  island    either a lake (radius 6-20 m) with 1-3 islands (holes) of
+            diameter 0.1-2 px, or a triangular island of diameter 0.1-3 px
+            enclosed by three rivers (each river's bank runs exactly along
+            one side of the triangle, so the exact hole is the triangle).
+  subpixel  a meandering river 0.1-0.8 px wide and 1-2 lakes of diameter
+            0.1-1 px (a polygon of 3-12 vertices) nearby.
+  seam      one of the four above with its feature of interest moved onto a
+            block side (or, one time in five, a block corner): exactly on it
+            one time in four, else within +-0.4 of the feature's size (at
+            least +-0.5 px) of it.
+
+Outside the seam family the feature of interest lies inside block (0, 0) of
+the scene (origin ORIGIN, a corner of the global 64 m block grid), at least
+12 m from its sides; long rivers still cross other blocks.
+
+All vertex coordinates are snapped to the driver's lattice (PIXEL_SIZE /
+256, exactly representable in binary), so the driver and the GEOS oracle see
+exactly the same input geometry, even for gaps of a few lattice units.
+Everything is deterministic: random.Random('<family>:<seed>').
+
+    make_scene(path, family, seed) -> open options (dict)
+    scene_features(family, seed) -> (rivers, lakes, meta)
+    describe(family, seed) -> one line with the scene's parameters
+
+The second half measures a run against the oracle the way issue 12 counts
+defects (measure(), topology_figures(): Hausdorff and its 99th percentile,
+specks, lost small features, ring counts, symmetric difference), for
+autotest/test_topology.py and bench/topology.py.
+"""
+
+import math
+import os
+import random
+from collections import Counter, defaultdict
+
+import numpy as np
+from osgeo import ogr
+from shapely.geometry import GeometryCollection, LinearRing, box
+from shapely.ops import unary_union
+
+import oracle
+import scenes
+
+PIXEL_SIZE = 0.5
+BLOCK_SIZE = 64.0
+LATTICE_Q = 256  # WM_Q: lattice points per pixel
+EPSG = scenes.SCENE_EPSG  # 32631
+# a corner of the global block grid near scenes.SCENE_ORIGIN
+# (400000 / 64 = 6250, 4699968 / 64 = 73437)
+ORIGIN = (400000.0, 4699968.0)
+
+BASE_FAMILIES = ('wedge', 'parallel', 'island', 'subpixel')
+FAMILIES = BASE_FAMILIES + ('seam',)
+
+
+# ----------------------------------------------------------------------------
+# small helpers
+# ----------------------------------------------------------------------------
+
+def _log_uniform(rng, lo, hi):
+    return math.exp(rng.uniform(math.log(lo), math.log(hi)))
+
+
+def _rot(p, a):
+    c, s = math.cos(a), math.sin(a)
+    return (c * p[0] - s * p[1], s * p[0] + c * p[1])
+
+
+def _add(p, q):
+    return (p[0] + q[0], p[1] + q[1])
+
+
+def _ngon(rng, cx, cy, diameter, n, rough=0.15):
+    """Closed counter-clockwise ring of n vertices around (cx, cy), radii
+    within +-rough of diameter / 2, random rotation."""
+    a0 = rng.uniform(0, 2 * math.pi)
+    pts = []
+    for i in range(n):
+        t = a0 + 2 * math.pi * i / n
+        r = 0.5 * diameter * (1.0 + rng.uniform(-rough, rough))
+        pts.append((cx + r * math.cos(t), cy + r * math.sin(t)))
+    pts.append(pts[0])
+    return pts
+
+
+def _line_intersection(n1, c1, n2, c2):
+    """Point P with n1 . P = c1 and n2 . P = c2."""
+    det = n1[0] * n2[1] - n1[1] * n2[0]
+    return ((c1 * n2[1] - c2 * n1[1]) / det, (n1[0] * c2 - n2[0] * c1) / det)
+
+
+# ----------------------------------------------------------------------------
+# families; each returns geometry in local coordinates around the feature of
+# interest at (0, 0): rivers [(pts, width)], lakes [(shell, [holes])], meta
+# (meta['scale']: size of the feature in m, for the seam placement)
+# ----------------------------------------------------------------------------
+
+def _wedge(rng, px):
+    theta = _log_uniform(rng, 1.0, 30.0)
+    h = math.radians(theta) / 2.0
+    w1, w2 = rng.uniform(1.0, 6.0), rng.uniform(1.0, 6.0)
+    hairpin = rng.random() < 0.25
+    if hairpin:
+        w2 = w1
+    target = rng.uniform(3.5, 5.0) * px          # land width reached at the far end
+    reach = target / (2.0 * math.tan(h))         # bisector distance tip -> that width
+    max_len = 200.0
+    # tip of the land wedge, bisector along +x, V = (0, 0); x_tip ~ (r1 + r2) / (2 sin h)
+    x_tip = (w1 + w2) / 4.0 / math.sin(h)
+    if x_tip + reach > max_len:                  # shrink the widths (not below 1 m)
+        k = max((max_len - reach) / x_tip, 1.0 / min(w1, w2))
+        w1, w2 = w1 * k, w2 * k
+    r1, r2 = w1 / 2.0, w2 / 2.0
+    # upper ray (cos h, sin h), outward normal (-sin h, cos h); lower ray mirrored
+    n1, n2 = (-math.sin(h), math.cos(h)), (-math.sin(h), -math.cos(h))
+    tip = _line_intersection(n1, -r1, n2, -r2)
+    length = (tip[0] + reach) / math.cos(h) + rng.uniform(2.0, 10.0)
+    e1 = (length * math.cos(h), length * math.sin(h))
+    e2 = (length * math.cos(h), -length * math.sin(h))
+    phi = rng.uniform(0, 2 * math.pi)
+
+    def loc(p):  # wedge frame -> local frame with the tip at (0, 0)
+        return _rot((p[0] - tip[0], p[1] - tip[1]), phi)
+    v = loc((0.0, 0.0))
+    rivers = []
+    if hairpin:
+        rivers.append(([loc(e1), v, loc(e2)], w1))
+    else:
+        rivers.append(([v, loc(e1)], w1))
+        rivers.append(([v, loc(e2)], w2))
+    trunk = rng.random() < 0.5
+    if trunk:
+        tw = max(w1, w2) * rng.uniform(1.0, 1.5)
+        ta = math.pi + math.radians(rng.uniform(-20.0, 20.0))
+        tl = rng.uniform(20.0, 40.0)
+        rivers.insert(0, ([loc((tl * math.cos(ta), tl * math.sin(ta))), v], tw))
+    meta = dict(angle_deg=theta, widths=(w1, w2), hairpin=hairpin, trunk=trunk,
+                tip_slope=2.0 * math.tan(h),
+                tip_from_vertex_m=math.hypot(*tip), length_m=length, scale=px)
+    return rivers, [], meta
+
+
+def _parallel(rng, px):
+    if rng.random() < 0.25:
+        phi = math.radians(90.0 * rng.randrange(4) + rng.uniform(-2.0, 2.0))
+    else:
+        phi = rng.uniform(0, math.pi)
+    w1, w2 = rng.uniform(1.0, 8.0), rng.uniform(1.0, 8.0)
+    r1, r2 = w1 / 2.0, w2 / 2.0
+    gap = _log_uniform(rng, 0.01, 3.0) * px
+    L = rng.uniform(30.0, 100.0)
+    converge = rng.random() < 0.5
+    closed = (not converge) and rng.random() < 0.25
+    if converge:
+        # gap(-L/2) = gap, gap(s_tip) = 0, negative (overlap) beyond
+        s_tip = rng.uniform(0.0, 0.3) * L
+        slope = -gap / (s_tip + L / 2.0)
+        s0 = s_tip  # feature of interest: the tip of the strip
+    else:
+        slope, s0 = 0.0, rng.uniform(-0.25, 0.25) * L
+
+    def g(s):
+        return gap + slope * (s + L / 2.0)
+
+    def pt(s, off):  # strip frame (s along, off across) -> local frame
+        return _rot((s - s0, off), phi)
+    a = [pt(-L / 2, -(r1 + g(-L / 2) / 2)), pt(L / 2, -(r1 + g(L / 2) / 2))]
+    b = [pt(-L / 2, r2 + g(-L / 2) / 2), pt(L / 2, r2 + g(L / 2) / 2)]
+    rivers = [(a, w1), (b, w2)]
+    if closed:
+        for s in (-L / 2 + rng.uniform(1.0, 8.0), L / 2 - rng.uniform(1.0, 8.0)):
+            cw = rng.uniform(2.0, 4.0)
+            ext = max(r1, r2) * 2 + rng.uniform(1.0, 5.0)
+            rivers.append(([pt(s, -ext), pt(s, ext)], cw))
+    meta = dict(angle_deg=math.degrees(phi) % 180.0, widths=(w1, w2), gap_px=gap / px,
+                length_m=L, converge=converge, closed=closed, scale=max(gap, px))
+    if converge:
+        meta['tip_slope'] = -slope  # gap change per metre along the strip
+    return rivers, [], meta
+
+
+def _island(rng, px):
+    variant = 'lake' if rng.random() < 0.5 else 'rivers'
+    if variant == 'lake':
+        R = rng.uniform(6.0, 20.0)
+        ang = rng.uniform(0, 2 * math.pi)
+        off = rng.uniform(0.0, 0.5) * R
+        cx, cy = off * math.cos(ang), off * math.sin(ang)
+        shell = scenes._blob(rng, cx, cy, R, n=rng.choice((24, 36, 48)), rough=0.08,
+                             harmonics=3)
+        holes, diams = [], []
+        d0 = _log_uniform(rng, 0.1, 2.0) * px
+        holes.append(_ngon(rng, 0.0, 0.0, d0, rng.choice((3, 4, 6, 8, 12, 24)))[::-1])
+        diams.append(d0 / px)
+        centres = [(0.0, 0.0)]
+        for _ in range(rng.randrange(3)):  # up to 2 more islands, 2-6 m away
+            d = _log_uniform(rng, 0.1, 2.0) * px
+            t = rng.uniform(0, 2 * math.pi)
+            dist = rng.uniform(2.0, 6.0)
+            x, y = dist * math.cos(t), dist * math.sin(t)
+            if math.hypot(x - cx, y - cy) > 0.6 * R or \
+                    min(math.hypot(x - u, y - v) for u, v in centres) < 2.0:
+                continue
+            centres.append((x, y))
+            holes.append(_ngon(rng, x, y, d, rng.choice((3, 4, 6, 8, 12, 24)))[::-1])
+            diams.append(d / px)
+        meta = dict(variant=variant, lake_radius_m=R, island_diam_px=diams, scale=d0)
+        return [], [(shell, holes)], meta
+    # a triangle enclosed by three rivers: each river's bank is one side
+    D = _log_uniform(rng, 0.1, 3.0) * px
+    while True:
+        ts = sorted(rng.uniform(0, 2 * math.pi) for _ in range(3))
+        tri = [(0.5 * D * math.cos(t), 0.5 * D * math.sin(t)) for t in ts]  # CCW
+
+        def angle(i):
+            p, q, r = tri[i], tri[(i + 1) % 3], tri[(i - 1) % 3]
+            v1, v2 = (q[0] - p[0], q[1] - p[1]), (r[0] - p[0], r[1] - p[1])
+            return math.degrees(math.acos(max(-1.0, min(1.0, (v1[0] * v2[0] + v1[1] * v2[1]) /
+                                                      (math.hypot(*v1) * math.hypot(*v2))))))
+        if min(angle(i) for i in range(3)) >= 8.0:
+            break
+    rivers, widths = [], []
+    for i in range(3):
+        p, q = tri[i], tri[(i + 1) % 3]
+        dx, dy = q[0] - p[0], q[1] - p[1]
+        ln = math.hypot(dx, dy)
+        ux, uy = dx / ln, dy / ln
+        nx, ny = uy, -ux  # outward normal of a CCW triangle's side
+        w = rng.uniform(1.0, 6.0)
+        e0, e1 = rng.uniform(5.0, 20.0), rng.uniform(5.0, 20.0)
+        o = w / 2.0
+        rivers.append(([(p[0] - e0 * ux + o * nx, p[1] - e0 * uy + o * ny),
+                        (q[0] + e1 * ux + o * nx, q[1] + e1 * uy + o * ny)], w))
+        widths.append(w)
+    meta = dict(variant=variant, island_diam_px=[D / px], widths=widths, scale=D)
+    return rivers, [], meta
+
+
+def _subpixel(rng, px):
+    w = rng.uniform(0.1, 0.8) * px
+    L = rng.uniform(20.0, 50.0)
+    A = rng.uniform(0.0, 3.0)
+    lam = rng.uniform(15.0, 40.0)
+    ph = rng.uniform(0, 2 * math.pi)
+    phi = rng.uniform(0, 2 * math.pi)
+    lake_first = rng.random() < 0.5
+    # river frame: along x, through (0, 0), |y| <= 2 A
+    pts, s = [], -L / 2
+    while True:
+        pts.append((s, A * (math.sin(2 * math.pi * s / lam + ph) - math.sin(ph))))
+        if s >= L / 2:
+            break
+        s = min(L / 2, s + rng.uniform(1.0, 3.0))
+    side = rng.choice((-1, 1))
+    clear = 2.0 * A + rng.uniform(3.0, 8.0)  # lake centre <-> river axis
+    river_shift = (0.0, -side * clear) if lake_first else (0.0, 0.0)
+    lakes, diams = [], []
+    for k in range(rng.choice((1, 2))):
+        d = _log_uniform(rng, 0.1, 1.0) * px
+        if lake_first:
+            c = (0.0, 0.0) if k == 0 else (rng.choice((-1, 1)) * rng.uniform(3.0, 10.0), 0.0)
+        else:
+            c = (rng.uniform(-L / 3, L / 3), side * clear)
+        c = _rot(c, phi)
+        lakes.append((_ngon(rng, c[0], c[1], d, rng.choice((3, 4, 5, 8, 12)), rough=0.2), []))
+        diams.append(d / px)
+    river = [_rot(_add(p, river_shift), phi) for p in pts]
+    meta = dict(width_px=w / px, length_m=L, meander_m=A, lake_diam_px=diams,
+                lake_at_anchor=lake_first, scale=(diams[0] * px if lake_first else w))
+    return [(river, w)], lakes, meta
+
+
+_GENERATORS = {'wedge': _wedge, 'parallel': _parallel, 'island': _island,
+               'subpixel': _subpixel}
+
+
+# ----------------------------------------------------------------------------
+# placement and output
+# ----------------------------------------------------------------------------
+
+def _snap(p, unit):
+    return (round(p[0] / unit) * unit, round(p[1] / unit) * unit)
+
+
+def _dedup(pts):
+    out = []
+    for p in pts:
+        if not out or p != out[-1]:
+            out.append(p)
+    return out
+
+
+def scene_features(family, seed, pixel_size=PIXEL_SIZE, block_size=BLOCK_SIZE,
+                   origin=ORIGIN):
+    """(rivers, lakes, meta): rivers [(points, width)], lakes [(shell,
+    [holes])] in absolute coordinates of EPSG:32631 snapped to the lattice,
+    meta a dict describing the scene (family, sub-family, anchor, ...)."""
+    if family not in FAMILIES:
+        raise ValueError('unknown family %r (one of %s)' % (family, ', '.join(FAMILIES)))
+    rng = random.Random('%s:%d' % (family, seed))
+    sub = rng.choice(BASE_FAMILIES) if family == 'seam' else family
+    rivers, lakes, meta = _GENERATORS[sub](rng, pixel_size)
+    B = block_size
+    lo, hi = 0.1875 * B, 0.8125 * B  # 12 .. 52 m inside a 64 m block
+    if family == 'seam':
+        where = rng.choice(('x', 'y', 'x', 'y', 'corner'))
+        ax = B if where in ('x', 'corner') else rng.uniform(lo, hi)
+        ay = B if where in ('y', 'corner') else rng.uniform(lo, hi)
+        amp = max(0.4 * meta['scale'], 0.5 * pixel_size)
+        exact = rng.random() < 0.25
+        if where in ('x', 'corner') and not exact:
+            ax += rng.uniform(-amp, amp)
+        if where in ('y', 'corner') and not exact:
+            ay += rng.uniform(-amp, amp)
+        meta.update(seam=where, seam_exact=exact)
+    else:
+        ax, ay = rng.uniform(lo, hi), rng.uniform(lo, hi)
+    anchor = (origin[0] + ax, origin[1] + ay)
+    unit = pixel_size / LATTICE_Q
+
+    def place(pts):
+        return _dedup([_snap(_add(p, anchor), unit) for p in pts])
+    out_rivers = []
+    for pts, w in rivers:
+        q = place(pts)
+        if len(q) >= 2:
+            out_rivers.append((q, w))
+    out_lakes = []
+    for shell, holes in lakes:
+        s = place(shell)
+        hs = [h for h in (place(h) for h in holes) if len(h) >= 4]
+        if len(s) >= 4:
+            out_lakes.append((s, hs))
+    meta.update(family=family, sub_family=sub, seed=seed, anchor=anchor, anchor_in_block=(ax, ay),
+                pixel_size=pixel_size, block_size=block_size)
+    return out_rivers, out_lakes, meta
+
+
+def _coords(pts):
+    return ','.join('%.17g %.17g' % p for p in pts)
+
+
+def make_scene(path, family, seed, pixel_size=PIXEL_SIZE, block_size=BLOCK_SIZE):
+    """Writes the scene `family`, `seed` to the GeoPackage `path` (layers
+    rivers: LineString + width; lakes: Polygon; EPSG:32631) and returns
+    the driver's open options for it (RIVERS, RIVERS_LAYER, LAKES,
+    LAKES_LAYER, WIDTH_FIELD, PIXEL_SIZE, BLOCK_SIZE)."""
+    if os.path.exists(path):
+        os.unlink(path)
+    rivers, lakes, meta = scene_features(family, seed, pixel_size, block_size)
+    rf = [{'geom': 'LINESTRING (%s)' % _coords(pts), 'width': float(w),
+           'name': '%s%d_r%d' % (family, seed, i)} for i, (pts, w) in enumerate(rivers)]
+    lf = [{'geom': 'POLYGON (%s)' % ','.join('(%s)' % _coords(r) for r in [s] + hs),
+           'name': '%s%d_l%d' % (family, seed, i)} for i, (s, hs) in enumerate(lakes)]
+    scenes.write_layer(path, 'rivers', ogr.wkbLineString, EPSG, rf,
+                       fields=[('width', 'Real'), ('name', 'String')])
+    scenes.write_layer(path, 'lakes', ogr.wkbPolygon, EPSG, lf, fields=[('name', 'String')])
+    return {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'LAKES': path, 'LAKES_LAYER': 'lakes',
+            'WIDTH_FIELD': 'width', 'PIXEL_SIZE': pixel_size, 'BLOCK_SIZE': block_size}
+
+
+def describe(family, seed, pixel_size=PIXEL_SIZE, block_size=BLOCK_SIZE):
+    """One line describing the scene (for reports and failure messages)."""
+    meta = scene_features(family, seed, pixel_size, block_size)[2]
+    keep = {k: v for k, v in meta.items() if k not in ('family', 'seed', 'pixel_size', 'anchor',
+                                                        'block_size', 'scale', 'tip_slope')}
+    parts = []
+    for k, v in sorted(keep.items()):
+        if isinstance(v, float):
+            parts.append('%s=%.4g' % (k, v))
+        elif isinstance(v, (list, tuple)):
+            parts.append('%s=(%s)' % (k, ','.join('%.4g' % x if isinstance(x, float) else str(x)
+                                                   for x in v)))
+        else:
+            parts.append('%s=%s' % (k, v))
+    return '%s seed %d: %s' % (family, seed, ' '.join(parts))
+
+
+# ----------------------------------------------------------------------------
+# topology figures against the oracle (shared by test_topology.py and
+# bench/topology.py); by_block arguments are {block: [geometries]}
+# ----------------------------------------------------------------------------
+
+SPECK_PX = 0.5        # a speck: max pairwise vertex distance <= 0.5 px
+MATCH_PX = 1.0        # an oracle ring of the same kind within 1 px excuses it
+SMALL_PX = 2.0        # oracle rings with a bounding box under 2 px ...
+LOST_PX = 1.0         # ... are lost without an output ring within 1 px
+NARROW_PX = 2.0       # narrow_land_area: land strips narrower than 2 px
+
+
+def ring_diameter(coords, limit):
+    """Max pairwise distance of a closed ring's vertices, or inf when its
+    bounding box already has a side longer than `limit`."""
+    c = np.asarray(coords, dtype=float)
+    c = c[:-1] if len(c) > 1 else c
+    if (c.max(axis=0) - c.min(axis=0)).max() > limit:
+        return math.inf
+    d = c[:, None, :] - c[None, :, :]
+    return float(np.sqrt((d * d).sum(axis=2)).max())
+
+
+def touches_block(coords, block, block_size, eps=1e-6):
+    """Whether a vertex of the ring lies on a side of its block's square."""
+    x0, y0 = block[0] * block_size, block[1] * block_size
+    x1, y1 = x0 + block_size, y0 + block_size
+    x, y = coords[:, 0], coords[:, 1]
+    return bool(((abs(x - x0) <= eps) | (abs(x - x1) <= eps) |
+                 (abs(y - y0) <= eps) | (abs(y - y1) <= eps)).any())
+
+
+class Ring:
+    """One ring of a block's polygons: kind 'outer' or 'hole', bounds,
+    whether it touches the block's square, diameter (inf when large)."""
+    __slots__ = ('block', 'kind', 'coords', 'bounds', 'touches', 'diam', 'line')
+
+    def __init__(self, block, kind, coords, block_size, diam_limit):
+        self.block, self.kind, self.coords = block, kind, coords
+        mn, mx = coords.min(axis=0), coords.max(axis=0)
+        self.bounds = (float(mn[0]), float(mn[1]), float(mx[0]), float(mx[1]))
+        self.touches = touches_block(coords, block, block_size)
+        self.diam = ring_diameter(coords, diam_limit)
+        self.line = LinearRing(coords) if len(coords) >= 4 else None
+
+    def size(self):
+        return max(self.bounds[2] - self.bounds[0], self.bounds[3] - self.bounds[1])
+
+    def center(self):
+        return (float(self.coords[:, 0].mean()), float(self.coords[:, 1].mean()))
+
+    def near(self, other, dist):
+        a, b = self.bounds, other.bounds
+        if a[0] - dist > b[2] or b[0] - dist > a[2] or a[1] - dist > b[3] or b[1] - dist > a[3]:
+            return False
+        if self.line is None or other.line is None:
+            return False
+        return self.line.distance(other.line) <= dist
+
+
+def block_rings(by_block, block_size, diam_limit):
+    out = []
+    for b, geoms in by_block.items():
+        for g in geoms:
+            for p in oracle.polygons_of(g):
+                rs = oracle.rings_of(p)
+                out.append(Ring(b, 'outer', rs[0], block_size, diam_limit))
+                out.extend(Ring(b, 'hole', r, block_size, diam_limit) for r in rs[1:])
+    return out
+
+
+def topology_figures(drv, orc, block_size, px):
+    """Ring topology of the output `drv` against the oracle `orc`:
+      specks_outer / specks_hole: output rings touching no side of their
+        block whose vertices all lie within SPECK_PX of each other (max
+        pairwise distance), with no oracle ring of the same kind within
+        MATCH_PX that is that small too (diameter <= the speck's + MATCH_PX:
+        what a ring within half a pixel of it may measure);
+      lost_outer / lost_hole: oracle rings touching no block side, bounding
+        box under SMALL_PX on both axes (small_outer / small_hole of them),
+        with no output ring of the same kind within LOST_PX;
+      ring_diff: sum over blocks and kinds of |output rings - oracle rings|;
+      speck_at / lost_at: up to 5 (kind, x, y) each."""
+    dr = block_rings(drv, block_size, SPECK_PX * px)
+    orr = block_rings(orc, block_size, (SPECK_PX + MATCH_PX) * px)
+    out = dict(specks_outer=0, specks_hole=0, lost_outer=0, lost_hole=0, small_outer=0,
+               small_hole=0, speck_at=[], lost_at=[])
+    for r in dr:
+        if r.touches or r.diam > SPECK_PX * px:
+            continue
+        if not any(o.kind == r.kind and o.diam <= r.diam + MATCH_PX * px and
+                   o.near(r, MATCH_PX * px) for o in orr):
+            out['specks_' + r.kind] += 1
+            if len(out['speck_at']) < 5:
+                out['speck_at'].append((r.kind,) + r.center())
+    for o in orr:
+        if o.touches or o.size() >= SMALL_PX * px:
+            continue
+        out['small_' + o.kind] += 1
+        if not any(r.kind == o.kind and r.near(o, LOST_PX * px) for r in dr):
+            out['lost_' + o.kind] += 1
+            if len(out['lost_at']) < 5:
+                out['lost_at'].append((o.kind,) + o.center())
+    cd = Counter((r.block, r.kind) for r in dr)
+    co = Counter((r.block, r.kind) for r in orr)
+    out['ring_diff'] = sum(abs(cd[k] - co[k]) for k in set(cd) | set(co))
+    return out
+
+
+def boundary_distances(drv, orc, block_size, step):
+    """As oracle.hausdorff (each block's square counts as boundary of both
+    sides, boundaries sampled every `step`), but returns every sample's
+    distance: (distances (numpy array, both directions), hausdorff, (x, y)
+    of the worst sample or None)."""
+    all_d, worst = [], (0.0, None)
+    for src, dst in ((drv, orc), (orc, drv)):
+        pts, tags = oracle._tagged_points(src, step)
+        if not len(pts):
+            continue
+        segs = oracle.boundary_segments([g for gs in dst.values() for g in gs])
+        d = oracle.nearest_distances(pts, segs, max(40.0 * step, 1.0))
+        d = np.minimum(d, oracle._frame_distance(pts, tags, block_size))
+        k = int(np.argmax(d))
+        if d[k] > worst[0]:
+            worst = (float(d[k]), (float(pts[k, 0]), float(pts[k, 1])))
+        all_d.append(d)
+    d = np.concatenate(all_d) if all_d else np.zeros(0)
+    return d, worst[0], worst[1]
+
+
+def narrow_land_area(water, px, width_px=NARROW_PX):
+    """Area of the exact union's land (around `water`, a shapely geometry)
+    in strips narrower than width_px pixels: what an opening by half that
+    width removes. Sampling at PIXEL_SIZE may fill such land with water."""
+    r = 0.5 * width_px * px
+    x0, y0, x1, y1 = water.bounds
+    land = box(x0 - 4 * r, y0 - 4 * r, x1 + 4 * r, y1 + 4 * r).difference(water)
+    return land.difference(land.buffer(-r).buffer(r)).area
+
+
+def measure(water_feats, oracle_by_block, block_size, px, step=None):
+    """Figures of one run against the oracle ({block: geometry}):
+    hausdorff_px, p99_px, worst_at, area_m2, oracle_area_m2, rel_area_diff,
+    symdiff_m2, invalid (polygons), + topology_figures(); also returns the
+    boundary sample distances in px (numpy array) as a second value."""
+    if step is None:
+        step = min(0.1, px / 10.0)
+    drv = defaultdict(list)
+    for f in water_feats:
+        if f.geom is not None:
+            drv[f.block].append(f.geom)
+    orc = {b: [g] for b, g in oracle_by_block.items()}
+    area_d = sum(oracle.geom_area(g, oracle.block_origin(b, block_size))
+                 for b, gs in drv.items() for g in gs)
+    area_o = sum(oracle.geom_area(g, oracle.block_origin(b, block_size))
+                 for b, g in oracle_by_block.items())
+    symdiff = 0.0
+    for b in set(drv) | set(orc):
+        a = unary_union(drv.get(b, [])) if all(g.is_valid for g in drv.get(b, [])) \
+            else unary_union([g.buffer(0) for g in drv.get(b, [])])
+        o = oracle_by_block.get(b, GeometryCollection())
+        if not (a.is_empty and o.is_empty):
+            symdiff += a.symmetric_difference(o).area
+    d, h, where = boundary_distances(drv, orc, block_size, step)
+    res = dict(hausdorff_px=h / px, p99_px=float(np.percentile(d, 99)) / px if len(d) else 0.0,
+               worst_at=where, area_m2=area_d, oracle_area_m2=area_o,
+               rel_area_diff=(area_d - area_o) / area_o if area_o else 0.0,
+               symdiff_m2=symdiff,
+               invalid=sum(1 for f in water_feats if f.geom is not None and not f.geom.is_valid))
+    res.update(topology_figures(drv, orc, block_size, px))
+    return res, d / px

@@ -1,0 +1,234 @@
+"""Driver output on the adversarial sub-pixel scenes of adversarial.py
+(issue 12: acute confluences, near-parallel rivers, tiny islands, sub-pixel
+streams and lakes, all of them also across block sides), against the GEOS
+oracle.
+
+Asserted here, on every scene, for SIMPLIFY=0 and the default SIMPLIFY
+(1 and 2 threads; also DEVICE=OPENCL with SIMPLIFY=0 where an OpenCL device
+is expected, see conftest.OPENCL_EXPECTED), what the product holds today:
+  - no GDAL error; every water polygon valid (oracle.check_water);
+  - the mesh covers each water polygon exactly, without overlaps
+    (oracle.check_mesh, relative 1e-9), one mesh feature per polygon;
+  - zero T-junctions and zero gaps on shared block sides, water and mesh
+    (oracle.check_seams);
+  - identical features, in the same order, for NUM_THREADS 1 and 2;
+  - OpenCL: the same number of features as the C path, area within 1e-4;
+  - SIMPLIFY=0, scenes with more than 100 m² of oracle water:
+    |area - oracle area| <= 0.5 % of the oracle area + the area of the exact
+    union's land narrower than 2 px (adversarial.narrow_land_area). Today
+    sampling fills such land with water (sub-pixel strips between parallel
+    rivers, the first metres of acute wedges): up to 7 % of the water area
+    over 2,000 scenes (bench/topology.py); the flat 0.5 % holds on every
+    scene without such land. Once issue 12 is fixed the allowance should go.
+The default SIMPLIFY's area is only recorded: Douglas-Peucker at T = 1 px on
+lakes of 6-20 m radius loses up to 9 % of their area.
+
+Recorded (printed with pytest -s and in autotest/oracle_report.txt), not
+asserted, because they are what issue 12 fixes: the boundary Hausdorff
+distance and its 99th percentile (px), specks (output rings whose vertices
+all lie within half a pixel of each other where the exact union has no such
+ring), oracle features under 2 px that vanished, the ring count difference
+and the symmetric difference, per scene (adversarial.measure). bench/topology.py
+prints the same figures per family over many seeds.
+"""
+
+import os
+
+import pytest
+from shapely.geometry import Point, Polygon
+
+import adversarial
+import oracle
+from conftest import OPENCL_EXPECTED
+
+PIXEL_SIZE = adversarial.PIXEL_SIZE   # 0.5 m
+BLOCK_SIZE = adversarial.BLOCK_SIZE   # 64 m
+AREA_REL = 0.005                      # 0.5 % ...
+AREA_MIN_M2 = 100.0                   # ... for scenes with more water than this
+NARROW_PX = 2.0                       # + land narrower than this (see the docstring)
+MESH_REL = 1e-9
+OPENCL_AREA_REL = 1e-4
+
+# seeds per family: 8 (40 scenes, ~15 s on 2 cores); WM_TOPOLOGY_SEEDS=N runs
+# N per family by hand (bench/topology.py prints the figures per family)
+SEEDS = range(int(os.environ.get('WM_TOPOLOGY_SEEDS', '8')))
+SCENE_IDS = ['%s-%d' % (f, s) for f in adversarial.FAMILIES for s in SEEDS]
+
+RUNS = {  # name: extra open options (METHOD=CONTOUR is the default)
+    'exact': {'SIMPLIFY': 0, 'NUM_THREADS': 1},
+    'exact_t2': {'SIMPLIFY': 0, 'NUM_THREADS': 2},
+    'default': {'NUM_THREADS': 1},
+    'default_t2': {'NUM_THREADS': 2},
+}
+THREAD_PAIRS = [('exact', 'exact_t2'), ('default', 'default_t2')]
+if OPENCL_EXPECTED:
+    RUNS['exact_cl'] = {'SIMPLIFY': 0, 'NUM_THREADS': 1, 'DEVICE': 'OPENCL'}
+ALL_RUNS = sorted(RUNS)
+MEASURED_RUNS = ['exact', 'default']
+
+
+class Scene:
+    """One adversarial scene: options, oracle clipped to blocks, driver runs
+    and cached figures."""
+
+    def __init__(self, wm, sid, scene_dir):
+        self.wm, self.id = wm, sid
+        self.family, seed = sid.rsplit('-', 1)
+        self.seed = int(seed)
+        path = os.path.join(scene_dir, 'adv_%s_%d.gpkg' % (self.family, self.seed))
+        self.options = adversarial.make_scene(path, self.family, self.seed)
+        self.meta = adversarial.scene_features(self.family, self.seed)[2]
+        self.describe = adversarial.describe(self.family, self.seed)
+        self.water = oracle.water(oracle.inputs_from_options(self.options))
+        self.oracle = oracle.clip_to_blocks(self.water, BLOCK_SIZE)
+        assert self.oracle, 'scene %s has no water' % sid
+        self.runs, self._cache = {}, {}
+
+    def run(self, name):
+        if name not in self.runs:
+            self.runs[name] = self.wm.run(dict(self.options, **RUNS[name]))
+        return self.runs[name]
+
+    def cached(self, key, fn):
+        if key not in self._cache:
+            self._cache[key] = fn()
+        return self._cache[key]
+
+    def narrow_land(self):
+        return self.cached('narrow', lambda: adversarial.narrow_land_area(
+            self.water, PIXEL_SIZE, NARROW_PX))
+
+    def measure(self, name):
+        def f():
+            fig, _ = adversarial.measure(self.run(name).water, self.oracle, BLOCK_SIZE, PIXEL_SIZE)
+            oracle.record('%s %s topology' % (self.id, name),
+                          hausdorff_px=fig['hausdorff_px'], p99_px=fig['p99_px'],
+                          specks_outer=fig['specks_outer'], specks_hole=fig['specks_hole'],
+                          lost_outer=fig['lost_outer'], lost_hole=fig['lost_hole'],
+                          ring_diff=fig['ring_diff'], rel_area_diff=fig['rel_area_diff'],
+                          symdiff_m2=fig['symdiff_m2'], oracle_area_m2=fig['oracle_area_m2'],
+                          narrow_land_m2=self.narrow_land(), worst_at=fig['worst_at'],
+                          polygons=len(self.run(name).water))
+            return fig
+        return self.cached(('measure', name), f)
+
+
+@pytest.fixture(scope='module', params=SCENE_IDS)
+def scene(request, wm, scene_dir):
+    return Scene(wm, request.param, scene_dir)
+
+
+def test_generator_deterministic():
+    for fam in adversarial.FAMILIES:
+        a = adversarial.scene_features(fam, 3)
+        assert a == adversarial.scene_features(fam, 3)
+        assert a[:2] != adversarial.scene_features(fam, 4)[:2]
+    with pytest.raises(ValueError):
+        adversarial.scene_features('nonesuch', 0)
+
+
+def test_generator_feature(scene):
+    """The oracle has the feature the scene is built around, at its anchor."""
+    m, w = scene.meta, scene.water
+    px, B = PIXEL_SIZE, BLOCK_SIZE
+    a = Point(m['anchor'])
+    sub = m['sub_family']
+    unit = px / adversarial.LATTICE_Q
+    assert all(abs(c / unit - round(c / unit)) < 1e-6
+               for line, _ in oracle.inputs_from_options(scene.options).rivers
+               for c in (line.coords[0][0], line.coords[0][1])), 'vertices off the lattice'
+    if sub == 'wedge' or (sub == 'parallel' and m['converge']):
+        # the tip of the land wedge / strip is on the exact boundary, up to
+        # the snapping to the lattice (a gap change of <= sqrt(2) unit moves
+        # the tip by that / the rate at which the land widens)
+        d = w.boundary.distance(a)
+        assert d <= 0.1 * px + 2.0 * unit / m['tip_slope'], (d, scene.describe)
+        if sub == 'wedge':
+            assert 1.0 - 1e-9 <= m['angle_deg'] <= 30.0 + 1e-9
+    elif sub == 'parallel':
+        assert not w.contains(a), 'the strip centre is water: %s' % scene.describe
+        assert 0.01 <= m['gap_px'] <= 3.0
+        if m['closed']:
+            holes = [Polygon(r) for p in oracle.polygons_of(w) for r in p.interiors]
+            assert any(h.contains(a) for h in holes), 'closed strip is no hole: %s' % scene.describe
+    elif sub == 'island':
+        holes = [Polygon(r) for p in oracle.polygons_of(w) for r in p.interiors]
+        near = [h for h in holes if h.distance(a) <= 1.5 * px]
+        assert near and min(max(h.bounds[2] - h.bounds[0], h.bounds[3] - h.bounds[1])
+                            for h in near) < 3.5 * px, scene.describe
+    else:  # subpixel
+        assert 0.1 - 1e-9 <= m['width_px'] <= 0.8 + 1e-9
+        assert any(max(p.bounds[2] - p.bounds[0], p.bounds[3] - p.bounds[1]) <= 1.3 * px
+                   for p in oracle.polygons_of(w)), 'no sub-pixel lake: %s' % scene.describe
+    if scene.family == 'seam':
+        x, y = m['anchor_in_block']
+        d = min(abs(x - B) if m['seam'] in ('x', 'corner') else B,
+                abs(y - B) if m['seam'] in ('y', 'corner') else B)
+        assert d <= max(0.4 * m['scale'], 0.5 * px) + 1e-9, scene.describe
+    else:
+        x, y = m['anchor_in_block']
+        assert 12.0 <= x <= 52.0 and 12.0 <= y <= 52.0
+
+
+@pytest.mark.parametrize('name', ALL_RUNS)
+def test_valid_polygons(scene, name):
+    res = scene.run(name)
+    assert not res.cap.errors, '%s: GDAL errors: %s' % (scene.describe, res.cap.errors[:3])
+    problems = oracle.check_water(res.water, BLOCK_SIZE)
+    assert not problems, '%s: %d problems:\n%s' % (scene.describe, len(problems),
+                                                   '\n'.join(problems[:10]))
+
+
+@pytest.mark.parametrize('name', ALL_RUNS)
+def test_mesh(scene, name):
+    res = scene.run(name)
+    problems, stats = oracle.check_mesh(res.mesh, res.water, BLOCK_SIZE, rel=MESH_REL)
+    assert not problems, '%s: %d problems:\n%s' % (scene.describe, len(problems),
+                                                   '\n'.join(problems[:10]))
+    assert stats['mesh_features'] == len(res.water)
+
+
+@pytest.mark.parametrize('name', ALL_RUNS)
+@pytest.mark.parametrize('layer', ['water', 'mesh'])
+def test_seams(scene, name, layer):
+    res = scene.run(name)
+    tj, gaps, details = oracle.check_seams(res.water if layer == 'water' else res.mesh, BLOCK_SIZE)
+    assert tj == 0 and gaps == 0, '%s: %d T-junctions, %d gaps:\n%s' % (
+        scene.describe, tj, gaps, '\n'.join(details[:10]))
+
+
+@pytest.mark.parametrize('pair', THREAD_PAIRS, ids=lambda p: p[0])
+def test_threads_identical(scene, pair):
+    ref, got = (scene.run(n).signature() for n in pair)
+    assert got == ref, '%s: %s differs from %s (%d/%d vs %d/%d features)' % (
+        scene.describe, pair[1], pair[0], len(got[0]), len(got[1]), len(ref[0]), len(ref[1]))
+
+
+if OPENCL_EXPECTED:
+    def test_opencl_matches_c_path(scene):
+        a, b = scene.run('exact'), scene.run('exact_cl')
+        assert len(a.water) == len(b.water) and len(a.mesh) == len(b.mesh), scene.describe
+        ca, cb = oracle.total_area(a.water), oracle.total_area(b.water)
+        assert abs(ca - cb) <= OPENCL_AREA_REL * ca, (scene.describe, ca, cb)
+
+
+def test_area(scene):
+    """SIMPLIFY=0: area within 0.5 % of the oracle's, plus the exact land
+    narrower than 2 px (see the module docstring); only for scenes with more
+    than 100 m² of water (sub-pixel scenes have a few m²)."""
+    fig = scene.measure('exact')
+    a, ao = fig['area_m2'], fig['oracle_area_m2']
+    if ao <= AREA_MIN_M2:
+        return
+    allowed = AREA_REL * ao + scene.narrow_land()
+    assert abs(a - ao) <= allowed, \
+        '%s: area %.3f m2 vs oracle %.3f m2 (rel %.5f): |diff| %.3f > %.3f (0.5 %% + %.3f m2 of land under %g px)' % (
+            scene.describe, a, ao, fig['rel_area_diff'], abs(a - ao), allowed, scene.narrow_land(), NARROW_PX)
+
+
+@pytest.mark.parametrize('name', MEASURED_RUNS)
+def test_topology_recorded(scene, name):
+    """Hausdorff, specks, lost features: recorded only (issue 12)."""
+    fig = scene.measure(name)
+    assert fig['invalid'] == 0, scene.describe
+    assert fig['hausdorff_px'] >= 0.0 and fig['specks_outer'] >= 0

@@ -1,0 +1,110 @@
+/*
+ * subpixel.h - what the samples of a block's field cannot see: boundary
+ * crossings hidden between two samples of one class, and the cells they
+ * make ambiguous, resolved from the exact inputs.
+ */
+#ifndef WM_SUBPIXEL_H
+#define WM_SUBPIXEL_H
+
+#include "field.h"
+#include "probe.h"
+
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
+    /** One cell edge with hidden crossings. */
+    typedef struct
+    {
+        uint64_t id;    /**< edge id, as contour.c numbers edges */
+        uint32_t first; /**< its crossings: off[first .. first + n - 1] */
+        uint32_t n;     /**< even, >= 2 */
+    } wm_hidden_edge;
+
+    /**
+     * The hidden crossings of a block and its ambiguous cells.
+     * Edge id: horizontal edge from sample (c, r) to (c + 1, r) is
+     * 2 * (r * (n + 1) + c), vertical from (c, r) to (c, r + 1) that + 1.
+     * A cell is keyed (tile index << 32 | (r % WM_TILE) * WM_TILE +
+     * c % WM_TILE), so the cells of a tile are one sorted run.
+     */
+    typedef struct
+    {
+        wm_hidden_edge *edge; /**< sorted by id (owned) */
+        size_t nedge, edgecap;
+        int32_t *off; /**< crossing offsets from the edge's first sample,
+                           increasing, in 1 .. WM_Q - 1 (owned) */
+        size_t noff, offcap;
+        uint64_t *cell; /**< ambiguous cells, sorted, distinct (owned) */
+        size_t ncell, cellcap;
+        uint8_t *near; /**< per tile: 1 when a cell of it or of a tile next
+                            to it is ambiguous (owned; NULL if none is) */
+        wm_pt *seed;   /**< a point on each input smaller than two pixels
+                            (a lake ring, a short river segment), by cell:
+                            seed[i] is in cell seedcell[i], sorted (owned) */
+        uint64_t *seedcell;
+        size_t nseed, seedcap, seedcellcap;
+    } wm_hidden;
+
+    /**
+     * Finds the hidden crossings of the block field f (the block's: f->w ==
+     * f->h == n + 1): every edge of a mixed tile whose two samples are of
+     * one class and too close to the boundary to exclude it (|va| + |vb| <=
+     * 1 pixel: the field is 1-Lipschitz, so a larger sum proves the edge
+     * clear) gets the exact crossings of the union's boundary with it
+     * (wm_probe_crossings); an edge with some is listed, and both its cells
+     * are ambiguous. Then every side of an ambiguous cell whose samples
+     * differ in class, but those on the block square, gets its crossings
+     * exactly too (listed, even when it has one); three or more make the
+     * cell across ambiguous as well, and so on. An edge of one class is a
+     * pure function of its two samples and the inputs, and an edge of the
+     * block square whose samples differ keeps its sampled crossing, so the
+     * two blocks sharing it agree on it. An input smaller than two pixels (a
+     * lake ring, a river segment with its width) may lie inside one cell,
+     * meeting no edge: a point of it seeds its cell, which is ambiguous
+     * too. Caller frees h with wm_hidden_free().
+     */
+    wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
+                             const wm_ctx *ctx);
+
+    /** Frees what h owns; h may be NULL or zeroed. */
+    void wm_hidden_free(wm_hidden *h);
+
+    /** Whether cell (c, r) of block field f is ambiguous. */
+    int wm_hidden_is_cell(const wm_hidden *h, const wm_field *f, int32_t c,
+                          int32_t r);
+
+    /**
+     * The exact crossing on side `side` (0 bottom, 1 right, 2 top, 3 left)
+     * of cell (c, r), when that side is one of an ambiguous cell whose
+     * samples differ in class and it holds one crossing: then *p is it and
+     * 1 is returned (marching squares must use it there, not its
+     * interpolated one, so that both cells of the side agree); else 0.
+     */
+    int wm_hidden_side_crossing(const wm_hidden *h, const wm_field *f,
+                                int32_t c, int32_t r, int side, wm_pt *p);
+
+    /** Receives a directed boundary segment (water on its left). Returns 0
+     *  to stop (out of memory). */
+    typedef int (*wm_segment_fn)(void *user, wm_pt a, wm_pt b);
+
+    /**
+     * The boundary inside ambiguous cell (c, r): its sides' crossings (the
+     * sampled one of a side whose samples differ in class, computed as
+     * contour.c does; the hidden ones otherwise) are joined by subdividing
+     * the cell, each new dividing segment's crossings found exactly, until
+     * every piece holds one boundary segment or is 2-3 lattice units wide.
+     * Segments end on crossings (shared with the neighbouring cells) or on
+     * points inside the cell; they are simple and meet only at their ends.
+     * Returns WM_OK, or WM_ERR_NOMEM.
+     */
+    wm_status wm_hidden_cell(const wm_field *f, wm_probe *probe,
+                             const wm_hidden *h, int32_t c, int32_t r,
+                             wm_segment_fn emit, void *user);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* WM_SUBPIXEL_H */
