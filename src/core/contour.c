@@ -98,23 +98,6 @@ typedef struct
     size_t ntiles, tcap;
 } state;
 
-/* Crossing on the edge from sample a (value va) to sample b (value vb),
- * which differ in class; (x, y) lattice of a; b is one sample to the right
- * (vertical == 0) or above (vertical == 1). */
-wm_pt wm_contour_crossing(float va, float vb, int32_t x, int32_t y,
-                          int vertical)
-{
-    const double t = (double)va / ((double)va - (double)vb);
-    double o = t * WM_Q + 0.5;
-    int32_t off = o < 1.0 ? 1 : (o >= WM_Q - 1 ? WM_Q - 1 : (int32_t)o);
-    wm_pt p = {x, y};
-    if (vertical)
-        p.y += off;
-    else
-        p.x += off;
-    return p;
-}
-
 static int push_seg(state *s, wm_pt ip, wm_pt op, int32_t c, int32_t r,
                     int iside, int oside)
 {

@@ -43,8 +43,20 @@ extern "C"
      * (value vb), which differ in class: the linear interpolation from the
      * first sample, rounded and clamped to offsets 1 .. WM_Q - 1.
      */
-    wm_pt wm_contour_crossing(float va, float vb, int32_t x, int32_t y,
-                              int vertical);
+    static inline wm_pt wm_contour_crossing(float va, float vb, int32_t x,
+                                            int32_t y, int vertical)
+    {
+        const double t = (double)va / ((double)va - (double)vb);
+        const double o = t * WM_Q + 0.5;
+        const int32_t off =
+            o < 1.0 ? 1 : (o >= WM_Q - 1 ? WM_Q - 1 : (int32_t)o);
+        wm_pt p = {x, y};
+        if (vertical)
+            p.y += off;
+        else
+            p.x += off;
+        return p;
+    }
 
     /**
      * The ring edge wm_contour_extract makes in cell (c, r) of the field

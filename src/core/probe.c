@@ -48,6 +48,11 @@ struct wm_probe_toggle
 #define DCELL (16 * WM_Q)
 #define DREACH WM_PROBE_REACH
 #define WIDE 1024
+/* Two boundaries closer than this (lattice units) along a segment are one
+ * (two inputs sharing it, or rounding); any farther apart bound a feature,
+ * kept at least a lattice unit wide so that it stays whole to its tip. */
+#define WM_COINCIDE 1e-6
+
 /* Height of a band of the ray index: 4 sample rows. */
 #define RBAND (4 * WM_Q)
 
@@ -578,11 +583,15 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
             if (n > 0 && o <= off[n - 1])
             {
                 /* a feature narrower than a lattice unit: kept one unit
-                 * wide when it is at least half a unit (a thin strip stays
-                 * whole), else it cancels the previous crossing (rounding,
-                 * or two inputs that share a boundary) */
+                 * wide (a thin strip stays whole to its tip), unless its
+                 * two boundaries coincide (two inputs sharing one) */
                 o = off[n - 1] + 1;
-                if (b[k] - last < 0.5 || o > L - 1)
+                if (o > L - 1 && off[n - 1] - 1 > (n > 1 ? off[n - 2] : 0))
+                {
+                    off[n - 1]--; /* room below: the pair moves down */
+                    o = L - 1;
+                }
+                if (b[k] - last < WM_COINCIDE || o > L - 1)
                 {
                     n--;
                     cur = after;

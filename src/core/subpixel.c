@@ -184,7 +184,8 @@ static int search_edge(wm_hidden *h, const wm_field *f, wm_probe *probe,
  * (an edge can be undecided only between two such samples), and where v is
  * water. The compares vectorize into bytes; eight 0/1 bytes are gathered
  * into eight bits by one multiplication (cf. contour.c). */
-static void row_bits(const float *row, uint64_t *near, uint64_t *water)
+WM_CLONES static void row_bits(const float *row, uint64_t *near,
+                               uint64_t *water)
 {
     enum
     {
@@ -192,10 +193,9 @@ static void row_bits(const float *row, uint64_t *near, uint64_t *water)
     };
     unsigned char bn[NB], bw[NB];
     for (int32_t i = 0; i <= WM_TILE; i++)
-    {
-        bn[i] = fabsf(row[i]) < 1.0f;
+        bn[i] = (unsigned char)((row[i] < 1.0f) & (row[i] > -1.0f));
+    for (int32_t i = 0; i <= WM_TILE; i++)
         bw[i] = row[i] <= 0;
-    }
     for (int32_t i = WM_TILE + 1; i < NB; i++)
         bn[i] = bw[i] = 0;
     *near = *water = 0;
@@ -212,11 +212,42 @@ static void row_bits(const float *row, uint64_t *near, uint64_t *water)
     }
 }
 
-/* Whether the edge between samples a and b (of one class) cannot decide:
- * |a| + |b| <= 1 pixel. */
-static int undecided(float a, float b)
+/* How far from its own end the samples of one column (or row) of the
+ * tile certify an edge clear: the edge's end sample a (value va) and the
+ * samples k = 1, 2 rows (columns) beside it, at stride `step` in the tile's
+ * value array, of the same class. A sample valued v at distance k from the
+ * edge's line clears the part of the edge within sqrt(v^2 - k^2) of its
+ * foot (the field is 1-Lipschitz and |v| never exceeds the distance to the
+ * boundary). lo, hi: how many rows (columns) the tile has on each side. */
+static float reach_of(const float *a, ptrdiff_t step, int lo, int hi)
 {
-    return fabsf(a) + fabsf(b) <= 1.0f;
+    const int wa = a[0] <= 0;
+    float h = fabsf(a[0]);
+    for (int k = 1; k <= 2; k++)
+        for (int sgn = -1; sgn <= 1; sgn += 2)
+        {
+            if ((sgn < 0 ? lo : hi) < k)
+                continue;
+            const float v = a[sgn * k * step];
+            const float e = v * v - (float)(k * k);
+            if ((v <= 0) == wa && e > h * h)
+                h = sqrtf(e);
+        }
+    return h;
+}
+
+/* Whether the edge from the sample at a to the one at a + along (values in
+ * the tile's array; the rows or columns beside it at stride `across`, lo
+ * and hi of them available on each side) cannot decide: both of one class
+ * (the caller checks) and the clear parts from both ends, by reach_of, do
+ * not cover it (with a margin of 1/1000 pixel for the float values). */
+static int undecided(const float *a, ptrdiff_t along, ptrdiff_t across, int lo,
+                     int hi)
+{
+    if (fabsf(a[0]) + fabsf(a[along]) > 1.0f)
+        return 0;
+    return reach_of(a, across, lo, hi) + reach_of(a + along, across, lo, hi) <=
+           1.001f;
 }
 
 /* Cell (c, r) of key k. */
@@ -458,7 +489,7 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
                 {
                     const int32_t q = __builtin_ctzll(hm);
                     hm &= hm - 1;
-                    if (undecided(row[q], row[q + 1]) &&
+                    if (undecided(row + q, 1, WM_TILE + 1, r - r0, r1 - r) &&
                         !search_edge(h, f, probe, c0 + q, r, 0, row[q] <= 0))
                         goto nomem;
                 }
@@ -466,7 +497,7 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
                 {
                     const int32_t q = __builtin_ctzll(vm);
                     vm &= vm - 1;
-                    if (undecided(row[q], row[q + WM_TILE + 1]) &&
+                    if (undecided(row + q, WM_TILE + 1, 1, q, c1 - c0 - q) &&
                         !search_edge(h, f, probe, c0 + q, r, 1, row[q] <= 0))
                         goto nomem;
                 }
@@ -622,16 +653,17 @@ static int taken(const rect *q, int s, int32_t v)
     return 0;
 }
 
-/* A split position in [lo + 2, hi - 2], nearest the middle, on no crossing
- * of sides a and b; or -1. */
+/* A split position in [lo + 3, hi - 3], nearest the middle, on no crossing
+ * of sides a and b; or -1. Parts at least 3 units wide: a part's side then
+ * holds two crossings, those of a strip one unit wide. */
 static int32_t split_at(const rect *q, int32_t lo, int32_t hi, int a, int b)
 {
     const int32_t mid = lo + (hi - lo) / 2;
-    for (int32_t d = 0; mid - d >= lo + 2 || mid + d <= hi - 2; d++)
+    for (int32_t d = 0; mid - d >= lo + 3 || mid + d <= hi - 3; d++)
         for (int sgn = 0; sgn < 2; sgn++)
         {
             const int32_t v = sgn ? mid + d : mid - d;
-            if (v < lo + 2 || v > hi - 2)
+            if (v < lo + 3 || v > hi - 3)
                 continue;
             if (!taken(q, a, v) && !taken(q, b, v))
                 return v;
@@ -871,9 +903,9 @@ static int run_rect(walker *w, const rect *q, int depth)
         if (!has_seed(q) || depth >= MAXDEPTH)
             return 1;
         const int32_t sx =
-            q->x1 - q->x0 >= 4 ? split_at(q, q->x0, q->x1, SB, ST) : -1;
+            q->x1 - q->x0 >= 6 ? split_at(q, q->x0, q->x1, SB, ST) : -1;
         const int32_t sy =
-            q->y1 - q->y0 >= 4 ? split_at(q, q->y0, q->y1, SL, SR) : -1;
+            q->y1 - q->y0 >= 6 ? split_at(q, q->y0, q->y1, SL, SR) : -1;
         return sx > 0 || sy > 0 ? split(w, q, sx, sy, depth) : 1;
     }
     xing *x = malloc((size_t)k * sizeof *x);
@@ -886,10 +918,10 @@ static int run_rect(walker *w, const rect *q, int depth)
                       : w->emit(w->user, x[1].p, x[0].p);
     else
     {
-        const int32_t sx = q->x1 - q->x0 >= 4 && depth < MAXDEPTH
+        const int32_t sx = q->x1 - q->x0 >= 6 && depth < MAXDEPTH
                                ? split_at(q, q->x0, q->x1, SB, ST)
                                : -1;
-        const int32_t sy = q->y1 - q->y0 >= 4 && depth < MAXDEPTH
+        const int32_t sy = q->y1 - q->y0 >= 6 && depth < MAXDEPTH
                                ? split_at(q, q->y0, q->y1, SL, SR)
                                : -1;
         if (sx > 0 || sy > 0)
