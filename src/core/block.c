@@ -17,6 +17,7 @@
 #include "paper.h"
 #include "simplify.h"
 
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -47,10 +48,49 @@ static wm_status copy_ring(const wm_rings *in, size_t i, wm_rings *out)
     return wm_rings_close(out);
 }
 
+/* Thinner than this (twice the area over the perimeter, lattice units) a
+ * ring inside the block is a remnant of rounding, not a feature. */
+#define WM_THIN 1.5
+
+/* Whether ring i of `in` lies inside the block square [0, S]^2 (no vertex
+ * on it) and is thinner than WM_THIN: what is left where a feature narrows
+ * below a lattice unit next to a sharp vertex of an input (its pieces
+ * would be specks). */
+static int thin_ring(const wm_rings *in, size_t i, int32_t S)
+{
+    const wm_pt *p = in->pts + in->start[i];
+    const size_t n = wm_rings_len(in, i);
+    double perim = 0;
+    for (size_t k = 0; k < n; k++)
+    {
+        const wm_pt a = p[k], b = p[k + 1 < n ? k + 1 : 0];
+        if (a.x == 0 || a.y == 0 || a.x == S || a.y == S)
+            return 0;
+        const double dx = (double)b.x - a.x, dy = (double)b.y - a.y;
+        perim += sqrt(dx * dx + dy * dy);
+    }
+    const wm_i128 a2 = wm_ring_area2(p, n);
+    return (double)(a2 < 0 ? -a2 : a2) < WM_THIN * perim;
+}
+
+/* drop[i] = 1 for the thin rings (thin_ring) and every ring nested in one
+ * (enc: the enclosing ring, or -1), which goes with it. */
+static void thin_rings(const wm_rings *in, const int32_t *enc, int32_t S,
+                       uint8_t *drop)
+{
+    for (size_t i = 0; i < in->nrings; i++)
+        drop[i] = (uint8_t)thin_ring(in, i, S);
+    for (size_t i = 0; i < in->nrings; i++)
+        for (int32_t j = enc[i]; j >= 0 && !drop[i]; j = enc[j])
+            drop[i] = drop[j];
+}
+
 /* Groups rings into polygons: each outer ring (in ring order) followed by
- * its holes (in ring order), copied into res->rings. */
+ * its holes (in ring order), copied into res->rings; rings with drop[i]
+ * set are left out. */
 static wm_status group(const wm_rings *in, const int32_t *enc,
-                       wm_block_result *res, const wm_ctx *ctx)
+                       const uint8_t *drop, wm_block_result *res,
+                       const wm_ctx *ctx)
 {
     const size_t nr = in->nrings;
     wm_status st = WM_OK;
@@ -67,6 +107,8 @@ static wm_status group(const wm_rings *in, const int32_t *enc,
      * hole in an outer ring */
     for (size_t i = 0; i < nr; i++)
     {
+        if (drop[i])
+            continue;
         if (outer[i] ? (enc[i] >= 0 && outer[enc[i]])
                      : (enc[i] < 0 || !outer[enc[i]]))
         {
@@ -85,12 +127,12 @@ static wm_status group(const wm_rings *in, const int32_t *enc,
     if (!cur || !hole || !res->poly_ring)
         goto nomem;
     for (size_t i = 0; i < nr; i++)
-        if (!outer[i])
+        if (!outer[i] && !drop[i])
             hole[cur[enc[i]]++] = i;
     res->npolys = 0;
     for (size_t i = 0; i < nr; i++)
     {
-        if (!outer[i])
+        if (!outer[i] || drop[i])
             continue;
         res->poly_ring[res->npolys++] = res->rings.nrings;
         if (copy_ring(in, i, &res->rings) != WM_OK)
@@ -189,6 +231,7 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     wm_status st;
     wm_rings raw, simp;
     int32_t *enc = NULL;
+    uint8_t *drop = NULL;
     memset(res, 0, sizeof *res);
     memset(&raw, 0, sizeof raw);
     memset(&simp, 0, sizeof simp);
@@ -229,7 +272,8 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     if (st != WM_OK)
         goto cleanup;
     enc = malloc((simp.nrings + 1) * sizeof *enc);
-    if (!enc)
+    drop = malloc(simp.nrings + 1);
+    if (!enc || !drop)
     {
         st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory");
         goto cleanup;
@@ -237,7 +281,10 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     if (simp.nrings)
         st = wm_holes_nesting(&simp, enc, ctx);
     if (st == WM_OK)
-        st = group(&simp, enc, res, ctx);
+    {
+        thin_rings(&simp, enc, s->n * WM_Q, drop);
+        st = group(&simp, enc, drop, res, ctx);
+    }
     double t4 = wm_now();
     res->seconds[WM_STAGE_HOLES] = t4 - t3;
     if (st != WM_OK)
@@ -247,6 +294,7 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     res->seconds[WM_STAGE_TRIANGULATE] = wm_now() - t4;
 cleanup:
     free(enc);
+    free(drop);
     wm_rings_free(&raw);
     wm_rings_free(&simp);
     if (st != WM_OK)
