@@ -469,7 +469,7 @@ static int lake_intervals(wm_probe *in, wm_pt P, int vertical, int32_t L,
                  * point inside it; a piece with none is too thin to tell
                  * and keeps the class before it */
                 const double c = ceil(from), f = floor(to);
-                if (c <= f && c > 0 && c < L)
+                if (c <= f && c >= 0 && f <= L)
                 {
                     const double t = floor((c + f) / 2);
                     const double x = P.x + (vertical ? 0 : t);

@@ -1,0 +1,123 @@
+/* test_subpixel.c - features narrower than a pixel, found from the inputs
+ * where the samples cannot tell (probe.c, subpixel.c, contour.c). */
+#include "contour.h"
+#include "field.h"
+#include "probe.h"
+#include "ring_check.h"
+#include "scene_util.h"
+#include "subpixel.h"
+#include "tap.h"
+
+#include <math.h>
+
+/* Rings of block (0, 0) of scene s (n x n cells): without (probe == 0) or
+ * with the exact search. */
+static wm_status extract(const wm_scene *s, int probe, wm_rings *r)
+{
+    wm_field f;
+    wm_probe p;
+    wm_status st =
+        wm_field_compute(s, 0, 0, s->n + 1, s->n + 1, NULL, &f, NULL);
+    if (st != WM_OK)
+        return st;
+    st = wm_probe_init(&p, s, 0, 0);
+    if (st == WM_OK)
+        st = wm_contour_extract_probed(&f, probe ? &p : NULL, r, NULL);
+    wm_probe_free(&p);
+    wm_field_free(&f);
+    return st;
+}
+
+static size_t count_sign(const wm_rings *r, int positive)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < r->nrings; i++)
+        k += (wm_ring_area2(r->pts + r->start[i], wm_rings_len(r, i)) > 0) ==
+             positive;
+    return k;
+}
+
+/* Whether some ring vertex lies within d lattice units of (x, y). */
+static int vertex_near(const wm_rings *r, double x, double y, double d)
+{
+    for (size_t k = 0; k < r->npts; k++)
+        if (hypot(r->pts[k].x - x, r->pts[k].y - y) <= d)
+            return 1;
+    return 0;
+}
+
+int main(void)
+{
+    /* Two rivers 10 px wide, their banks 0.2 px apart between two sample
+     * rows (y = 100.3 and 100.5): every sample beside the strip of land is
+     * water. */
+    wm_scene s;
+    su_init(&s, 256);
+    const double a[] = {20, 95.3, 200, 95.3}, b[] = {20, 105.5, 200, 105.5};
+    su_river(&s, a, 2, 5.0);
+    su_river(&s, b, 2, 5.0);
+    su_finish(&s);
+
+    /* the exact search of one edge across the strip */
+    wm_probe p;
+    TAP_EQ(wm_probe_init(&p, &s, 0, 0), WM_OK, "probe");
+    int32_t off[WM_Q];
+    int cls1 = 1;
+    const int k = wm_probe_crossings(&p, (wm_pt){100 * WM_Q, 100 * WM_Q}, 1,
+                                     WM_Q, 1, &cls1, off, WM_Q);
+    TAP_EQ(k, 2, "two crossings on the edge across the strip");
+    /* the banks on the lattice: su_river truncates 95.3 px to 24396 units */
+    TAP_OK(k == 2 && off[0] == 76 && off[1] == 128,
+           "at the banks: 0.3 and 0.5 px (76 and 128 units), got %d %d",
+           k > 0 ? off[0] : -1, k > 1 ? off[1] : -1);
+    /* the edge beside it, inside river A only: none */
+    cls1 = 1;
+    TAP_EQ(wm_probe_crossings(&p, (wm_pt){100 * WM_Q, 99 * WM_Q}, 1, WM_Q, 1,
+                              &cls1, off, WM_Q),
+           0, "no crossing inside one river");
+    /* a free end class is found: from land into river A's bank */
+    cls1 = -1;
+    TAP_EQ(wm_probe_crossings(&p, (wm_pt){100 * WM_Q, 90 * WM_Q}, 1, WM_Q, 0,
+                              &cls1, off, WM_Q),
+           1, "one crossing into the river");
+    TAP_EQ(cls1, 1, "the far end's class is water");
+    TAP_EQ(off[0], 76, "at the bank, 90.3 px");
+    wm_probe_free(&p);
+
+    wm_rings r0 = {0}, r1 = {0};
+    TAP_EQ(extract(&s, 0, &r0), WM_OK, "extract from the samples alone");
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_EQ(count_sign(&r0, 1), 1, "samples alone: one merged water ring");
+    TAP_EQ(count_sign(&r1, 1), 2, "exact search: the two rivers apart");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    TAP_OK(vertex_near(&r1, 100.5 * WM_Q, 100.3 * WM_Q, 1.0) &&
+               vertex_near(&r1, 100.5 * WM_Q, 100.5 * WM_Q, 1.0),
+           "vertices on both sides of the strip, exactly");
+    wm_rings_free(&r0);
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
+
+    /* A pond of 0.3 px inside one cell in open land, and an island of
+     * 0.4 px inside one cell of a lake: the samples see neither; the
+     * seeded cells find both. */
+    su_init(&s, 64);
+    const double pond[] = {10.3, 10.3, 10.6, 10.3, 10.45, 10.6};
+    const double lake[] = {20,   20,   40,   20,   40,   40,   20,   40,
+                           30.3, 30.3, 30.3, 30.7, 30.7, 30.7, 30.7, 30.3};
+    const int npond = 3, nlake[] = {4, 4};
+    su_lake(&s, pond, &npond, 1);
+    su_lake(&s, lake, nlake, 2);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 0, &r0), WM_OK, "extract from the samples alone");
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_EQ(r0.nrings, 1, "samples alone: the lake only");
+    TAP_EQ(count_sign(&r1, 1), 2, "exact search: the lake and the pond");
+    TAP_EQ(count_sign(&r1, 0), 1, "exact search: the island");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    TAP_OK(vertex_near(&r1, 10.45 * WM_Q, 10.6 * WM_Q, 8.0),
+           "the pond's apex within 1/32 px");
+    wm_rings_free(&r0);
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
+    return TAP_DONE();
+}
