@@ -379,12 +379,54 @@ static void mark_links(state *s, const wm_field *f, size_t s0)
     }
 }
 
+/* The segments of the cells of mixed tile t (tile-major order) that are
+ * not ambiguous; *hc walks the ambiguous cells. Returns 0 when out of
+ * memory. */
+static int tile_segments(state *s, const wm_field *f, size_t t, size_t *hc)
+{
+    const int32_t n = s->n;
+    const int32_t c0 = (int32_t)(t % (size_t)f->ntx) * WM_TILE;
+    const int32_t r0 = (int32_t)(t / (size_t)f->ntx) * WM_TILE;
+    const int32_t c1 = c0 + WM_TILE < n ? c0 + WM_TILE : n;
+    const int32_t r1 = r0 + WM_TILE < n ? r0 + WM_TILE : n;
+    if (!wm_grow((void **)&s->tiles, &s->tcap, s->ntiles + 1, sizeof *s->tiles))
+        return 0;
+    const size_t s0 = s->nsegs;
+    /* ambiguous cells are done apart (cmask: per row of the tile) */
+    uint64_t cmask[WM_TILE];
+    ambiguous_of_tile(&s->hid, t, hc, cmask);
+    /* water bits of the tile's sample rows; a cell needs work only where
+     * its four corner bits differ */
+    uint64_t below = water_bits(f->val[t]);
+    for (int32_t r = r0; r < r1; r++)
+    {
+        const float *row = f->val[t] + (r - r0) * (WM_TILE + 1);
+        const uint64_t above = water_bits(row + WM_TILE + 1);
+        uint64_t mixed =
+            (below ^ (below >> 1)) | (above ^ (above >> 1)) | (below ^ above);
+        mixed &= ((UINT64_C(1) << (c1 - c0)) - 1) & ~cmask[r - r0];
+        while (mixed)
+        {
+            const int32_t q = __builtin_ctzll(mixed);
+            mixed &= mixed - 1;
+            if (!cell(s, c0 + q, r, row + q))
+                return 0;
+        }
+        below = above;
+    }
+    if (s->hid.near && s->hid.near[t])
+        mark_links(s, f, s0);
+    const tilesegs ts = {s0, s->nsegs, c0, r0};
+    s->tiles[s->ntiles++] = ts;
+    return 1;
+}
+
 /* wm_segment_fn for the segments of an ambiguous cell: linked through the
- * hash at both ends. */
+ * hash at both ends (their cell is not used). */
 static int push_ambiguous(void *user, wm_pt a, wm_pt b)
 {
     state *s = user;
-    if (!push_seg(s, a, b, s->cur_c, s->cur_r, 0, 0))
+    if (!push_seg(s, a, b, 0, 0, 0, 0))
         return 0;
     s->segs[s->nsegs - 1].flags = LINK_IN | LINK_OUT;
     return 1;
@@ -415,60 +457,13 @@ wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
         goto cleanup;
 
     size_t hc = 0; /* the ambiguous cells of the tiles so far */
-    for (int32_t ty = 0; ty < f->nty; ty++)
-        for (int32_t tx = 0; tx < f->ntx; tx++)
-        {
-            const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
-            if (f->kind[t] != WM_TILE_MIXED)
-                continue;
-            const int32_t c0 = tx * WM_TILE, r0 = ty * WM_TILE;
-            const int32_t c1 = c0 + WM_TILE < n ? c0 + WM_TILE : n;
-            const int32_t r1 = r0 + WM_TILE < n ? r0 + WM_TILE : n;
-            /* water bits of the tile's sample rows; a cell needs work only
-             * where its four corner bits differ */
-            if (!wm_grow((void **)&s.tiles, &s.tcap, s.ntiles + 1,
-                         sizeof *s.tiles))
-                goto nomem;
-            const size_t s0 = s.nsegs;
-            /* ambiguous cells are done apart (cmask: per row of the tile) */
-            uint64_t cmask[WM_TILE];
-            ambiguous_of_tile(&s.hid, t, &hc, cmask);
-            uint64_t below = water_bits(f->val[t]);
-            for (int32_t r = r0; r < r1; r++)
-            {
-                const float *row = f->val[t] + (r - r0) * (WM_TILE + 1);
-                const uint64_t above = water_bits(row + WM_TILE + 1);
-                uint64_t mixed = (below ^ (below >> 1)) |
-                                 (above ^ (above >> 1)) | (below ^ above);
-                mixed &= ((UINT64_C(1) << (c1 - c0)) - 1) & ~cmask[r - r0];
-                while (mixed)
-                {
-                    const int32_t q = __builtin_ctzll(mixed);
-                    mixed &= mixed - 1;
-                    if (!cell(&s, c0 + q, r, row + q))
-                        goto nomem;
-                }
-                below = above;
-            }
-            if (s.hid.near && s.hid.near[t])
-                mark_links(&s, f, s0);
-            const tilesegs ts = {s0, s.nsegs, c0, r0};
-            s.tiles[s.ntiles++] = ts;
-        }
-    const size_t ntileseg = s.nsegs;
-    for (size_t i = 0; i < s.hid.ncell; i++)
-    {
-        const uint64_t key = s.hid.cell[i];
-        const int64_t t = (int64_t)(key >> 32);
-        const int32_t local = (int32_t)(key & 0xffffffffu);
-        const int32_t c = (int32_t)(t % f->ntx) * WM_TILE + local % WM_TILE;
-        const int32_t r = (int32_t)(t / f->ntx) * WM_TILE + local / WM_TILE;
-        s.cur_c = c;
-        s.cur_r = r;
-        if ((st = wm_hidden_cell(f, probe, &s.hid, c, r, push_ambiguous, &s)) !=
-            WM_OK)
+    for (size_t t = 0; t < (size_t)f->ntx * (size_t)f->nty; t++)
+        if (f->kind[t] == WM_TILE_MIXED && !tile_segments(&s, f, t, &hc))
             goto nomem;
-    }
+    const size_t ntileseg = s.nsegs;
+    if (s.hid.ncell &&
+        (st = wm_hidden_cells(f, probe, &s.hid, push_ambiguous, &s)) != WM_OK)
+        goto nomem;
 
     if (s.nsegs >= NO_SEG)
         goto nomem; /* links need 32 bits */

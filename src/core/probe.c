@@ -497,55 +497,13 @@ static int lake_intervals(wm_probe *in, wm_pt P, int vertical, int32_t L,
     return 1;
 }
 
-int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
-                       int *cls1, int32_t *off, int max)
+/* The crossings of the sorted water intervals iv[0 .. niv) (pairs) with
+ * the open segment (0, L), rounded to the lattice into off[] (see
+ * wm_probe_crossings), the classes at the ends being cls0 and *cls1 (< 0:
+ * found and written). Returns how many. */
+static int round_crossings(const double *iv, size_t niv, int32_t L, int cls0,
+                           int *cls1, int32_t *off, int max)
 {
-    const wm_scene *s = in->s;
-    const int64_t Gx = (int64_t)P.x + in->X0, Gy = (int64_t)P.y + in->Y0;
-    size_t niv = 0;
-    /* rivers: the capsules of the midpoint's cell (any capsule meeting the
-     * segment is within half of it from the midpoint, so registered) */
-    const double mx = P.x + (vertical ? 0 : L / 2.0);
-    const double my = P.y + (vertical ? L / 2.0 : 0);
-    size_t c0, c1;
-    int inside = 0; /* an input's boundary crosses the segment */
-    const int32_t cx = dcell(in, mx), cy = dcell(in, my);
-    wm_cells_row(&in->cells, cy, cx, cx, &c0, &c1);
-    const size_t n0 = c1 - c0;
-    for (size_t i = 0; i < n0 + in->nwide; i++)
-    {
-        const wm_river_seg *g =
-            &s->segs[i < n0 ? in->cells.item[c0 + i] : in->wide[i - n0]];
-        double lo, hi;
-        /* the capsule's box against the segment's */
-        const double m = g->r;
-        if ((double)((g->ax < g->bx ? g->ax : g->bx) - Gx) - m >
-                (vertical ? 0 : L) ||
-            (double)((g->ax > g->bx ? g->ax : g->bx) - Gx) + m < 0 ||
-            (double)((g->ay < g->by ? g->ay : g->by) - Gy) - m >
-                (vertical ? L : 0) ||
-            (double)((g->ay > g->by ? g->ay : g->by) - Gy) + m < 0)
-            continue;
-        if (!capsule_interval(g, Gx, Gy, vertical, &lo, &hi))
-            continue;
-        inside |= (lo > 0 && lo < L) || (hi > 0 && hi < L);
-        if (!add_interval(in, &niv, lo, hi, L))
-            return -1;
-    }
-    const long ntg = in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L) : 0;
-    if (ntg < 0)
-        return -1;
-    if (!inside && ntg == 0 && (*cls1 < 0 || *cls1 == cls0))
-    {
-        /* every input's membership is constant along the segment */
-        if (*cls1 < 0)
-            *cls1 = cls0;
-        return 0;
-    }
-    if (ntg || in->nledge)
-        if (!lake_intervals(in, P, vertical, L, (size_t)ntg, &niv))
-            return -1;
-    qsort(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
     /* the union's boundaries, rounded, normalized against the ends'
      * classes: a boundary that does not change the class (rounding at an
      * end) is skipped, two on one lattice point cancel */
@@ -556,8 +514,8 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
     {
         /* boundaries: the end of the union so far when the next interval
          * starts beyond it, and that start */
-        const double lo = i < niv ? in->iv[2 * i] : INFINITY;
-        const double hi = i < niv ? in->iv[2 * i + 1] : INFINITY;
+        const double lo = i < niv ? iv[2 * i] : INFINITY;
+        const double hi = i < niv ? iv[2 * i + 1] : INFINITY;
         double b[2];
         int nb = 0;
         if (lo > reach)
@@ -615,6 +573,58 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
             off[n++] = L / 2;
     }
     return n;
+}
+
+int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
+                       int *cls1, int32_t *off, int max)
+{
+    const wm_scene *s = in->s;
+    const int64_t Gx = (int64_t)P.x + in->X0, Gy = (int64_t)P.y + in->Y0;
+    size_t niv = 0;
+    /* rivers: the capsules of the midpoint's cell (any capsule meeting the
+     * segment is within half of it from the midpoint, so registered) */
+    const double mx = P.x + (vertical ? 0 : L / 2.0);
+    const double my = P.y + (vertical ? L / 2.0 : 0);
+    size_t c0, c1;
+    int inside = 0; /* an input's boundary crosses the segment */
+    const int32_t cx = dcell(in, mx), cy = dcell(in, my);
+    wm_cells_row(&in->cells, cy, cx, cx, &c0, &c1);
+    const size_t n0 = c1 - c0;
+    for (size_t i = 0; i < n0 + in->nwide; i++)
+    {
+        const wm_river_seg *g =
+            &s->segs[i < n0 ? in->cells.item[c0 + i] : in->wide[i - n0]];
+        double lo, hi;
+        /* the capsule's box against the segment's */
+        const double m = g->r;
+        if ((double)((g->ax < g->bx ? g->ax : g->bx) - Gx) - m >
+                (vertical ? 0 : L) ||
+            (double)((g->ax > g->bx ? g->ax : g->bx) - Gx) + m < 0 ||
+            (double)((g->ay < g->by ? g->ay : g->by) - Gy) - m >
+                (vertical ? L : 0) ||
+            (double)((g->ay > g->by ? g->ay : g->by) - Gy) + m < 0)
+            continue;
+        if (!capsule_interval(g, Gx, Gy, vertical, &lo, &hi))
+            continue;
+        inside |= (lo > 0 && lo < L) || (hi > 0 && hi < L);
+        if (!add_interval(in, &niv, lo, hi, L))
+            return -1;
+    }
+    const long ntg = in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L) : 0;
+    if (ntg < 0)
+        return -1;
+    if (!inside && ntg == 0 && (*cls1 < 0 || *cls1 == cls0))
+    {
+        /* every input's membership is constant along the segment */
+        if (*cls1 < 0)
+            *cls1 = cls0;
+        return 0;
+    }
+    if (ntg || in->nledge)
+        if (!lake_intervals(in, P, vertical, L, (size_t)ntg, &niv))
+            return -1;
+    qsort(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
+    return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
 }
 
 wm_status wm_probe_init(wm_probe *p, const wm_scene *s, int64_t bx, int64_t by)

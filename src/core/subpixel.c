@@ -49,8 +49,9 @@
 
 /* Most crossings one segment can hold: one per interior lattice point. */
 #define MAXCROSS WM_Q
-/* Subdivision depth bound (a cell is 256 units: 8 halvings reach 1). */
-#define MAXDEPTH 24
+/* Subdivision depth bound (a cell is 256 units: 7 halvings of each side
+ * reach parts 3 units wide). */
+#define MAXDEPTH 32
 
 static uint64_t edge_id(int32_t n, int32_t c, int32_t r, int vertical)
 {
@@ -757,132 +758,83 @@ static int divide(walker *w, wm_pt P, int vertical, int32_t L, int cls0,
     return k;
 }
 
-/* Splits q at x = sx (sx > 0) and/or y = sy (sy > 0) and runs the parts. */
-static int split(walker *w, const rect *q, int32_t sx, int32_t sy, int depth)
+/* Splits q in two at x = at (vertical != 0) or y = at, along one
+ * dividing segment whose crossings are found exactly (its end classes are
+ * those of the sides it starts and ends on), and runs both parts. */
+static int split(walker *w, const rect *q, int vertical, int32_t at, int depth)
 {
-    int32_t *buf = malloc(4 * MAXCROSS * sizeof *buf);
-    if (!buf)
+    int32_t *mid = malloc(MAXCROSS * sizeof *mid);
+    if (!mid)
         return 0;
-    int32_t *hl = buf, *hr = buf + MAXCROSS, *vb = buf + 2 * MAXCROSS,
-            *vt = buf + 3 * MAXCROSS;
-    int nhl = 0, nhr = 0, nvb = 0, nvt = 0, ok = 1;
-    rect part[4];
-    int nparts = 0;
-    if (sx > 0 && sy > 0)
+    /* the sides the dividing segment starts and ends on, and the two
+     * sides it cuts */
+    const int s0 = vertical ? SB : SL, s1 = vertical ? ST : SR;
+    const int c0 = class_at(q, s0, at);
+    int c1 = class_at(q, s1, at);
+    const wm_pt P = vertical ? (wm_pt){at, q->y0} : (wm_pt){q->x0, at};
+    const int n = divide(
+        w, P, vertical, vertical ? q->y1 - q->y0 : q->x1 - q->x0, c0, &c1, mid);
+    int ok = n >= 0;
+    rect part[2];
+    for (int k = 0; k < 2 && ok; k++)
     {
-        /* the centre's class comes with the left half of the horizontal */
-        int cc = -1, cr = class_at(q, SR, sy), cb = -1, ct = -1;
-        nhl = divide(w, (wm_pt){q->x0, sy}, 0, sx - q->x0, class_at(q, SL, sy),
-                     &cc, hl);
-        nhr = divide(w, (wm_pt){sx, sy}, 0, q->x1 - sx, cc, &cr, hr);
-        cb = cc;
-        nvb = divide(w, (wm_pt){sx, q->y0}, 1, sy - q->y0, class_at(q, SB, sx),
-                     &cb, vb);
-        ct = class_at(q, ST, sx);
-        nvt = divide(w, (wm_pt){sx, sy}, 1, q->y1 - sy, cc, &ct, vt);
-        if (nhl < 0 || nhr < 0 || nvb < 0 || nvt < 0)
+        rect *a = &part[k];
+        *a = *q;
+        if (vertical)
         {
-            free(buf);
-            return 0;
+            /* k = 0: left of x = at, k = 1: right of it */
+            if (k == 0)
+                a->x1 = at;
+            else
+                a->x0 = at;
+            a->cls[k ? 0 : 1] = c0;
+            a->cls[k ? 3 : 2] = c1;
+            sub_side(q, SB, k ? at : q->x0, k ? q->x1 : at, &a->side[SB],
+                     &a->ns[SB]);
+            sub_side(q, ST, k ? at : q->x0, k ? q->x1 : at, &a->side[ST],
+                     &a->ns[ST]);
+            a->side[k ? SL : SR] = mid;
+            a->ns[k ? SL : SR] = n;
         }
-        const int cls_sb = class_at(q, SB, sx), cls_st = class_at(q, ST, sx);
-        const int cls_sl = class_at(q, SL, sy), cls_sr = class_at(q, SR, sy);
-        rect *a = &part[nparts++]; /* bottom left */
-        *a = (rect){q->x0, q->y0, sx,   sy, {q->cls[0], cls_sb, cc, cls_sl},
-                    {0},   {0},   NULL, 0};
-        sub_side(q, SB, q->x0, sx, &a->side[SB], &a->ns[SB]);
-        a->side[SR] = vb, a->ns[SR] = nvb;
-        a->side[ST] = hl, a->ns[ST] = nhl;
-        sub_side(q, SL, q->y0, sy, &a->side[SL], &a->ns[SL]);
-        a = &part[nparts++]; /* bottom right */
-        *a = (rect){sx,  q->y0, q->x1, sy, {cls_sb, q->cls[1], cls_sr, cc},
-                    {0}, {0},   NULL,  0};
-        sub_side(q, SB, sx, q->x1, &a->side[SB], &a->ns[SB]);
-        sub_side(q, SR, q->y0, sy, &a->side[SR], &a->ns[SR]);
-        a->side[ST] = hr, a->ns[ST] = nhr;
-        a->side[SL] = vb, a->ns[SL] = nvb;
-        a = &part[nparts++]; /* top right */
-        *a = (rect){sx,  sy,  q->x1, q->y1, {cc, cls_sr, q->cls[2], cls_st},
-                    {0}, {0}, NULL,  0};
-        a->side[SB] = hr, a->ns[SB] = nhr;
-        sub_side(q, SR, sy, q->y1, &a->side[SR], &a->ns[SR]);
-        sub_side(q, ST, sx, q->x1, &a->side[ST], &a->ns[ST]);
-        a->side[SL] = vt, a->ns[SL] = nvt;
-        a = &part[nparts++]; /* top left */
-        *a = (rect){q->x0, sy,  sx,   q->y1, {cls_sl, cc, cls_st, q->cls[3]},
-                    {0},   {0}, NULL, 0};
-        a->side[SB] = hl, a->ns[SB] = nhl;
-        a->side[SR] = vt, a->ns[SR] = nvt;
-        sub_side(q, ST, q->x0, sx, &a->side[ST], &a->ns[ST]);
-        sub_side(q, SL, sy, q->y1, &a->side[SL], &a->ns[SL]);
-    }
-    else if (sx > 0)
-    {
-        const int cls_sb = class_at(q, SB, sx);
-        int cls_st = class_at(q, ST, sx);
-        nvb = divide(w, (wm_pt){sx, q->y0}, 1, q->y1 - q->y0, cls_sb, &cls_st,
-                     vb);
-        if (nvb < 0)
+        else
         {
-            free(buf);
-            return 0;
+            /* k = 0: below y = at, k = 1: above it */
+            if (k == 0)
+                a->y1 = at;
+            else
+                a->y0 = at;
+            a->cls[k ? 0 : 3] = c0;
+            a->cls[k ? 1 : 2] = c1;
+            sub_side(q, SL, k ? at : q->y0, k ? q->y1 : at, &a->side[SL],
+                     &a->ns[SL]);
+            sub_side(q, SR, k ? at : q->y0, k ? q->y1 : at, &a->side[SR],
+                     &a->ns[SR]);
+            a->side[k ? SB : ST] = mid;
+            a->ns[k ? SB : ST] = n;
         }
-        rect *a = &part[nparts++]; /* left */
-        *a = (rect){
-            q->x0, q->y0, sx,   q->y1, {q->cls[0], cls_sb, cls_st, q->cls[3]},
-            {0},   {0},   NULL, 0};
-        sub_side(q, SB, q->x0, sx, &a->side[SB], &a->ns[SB]);
-        a->side[SR] = vb, a->ns[SR] = nvb;
-        sub_side(q, ST, q->x0, sx, &a->side[ST], &a->ns[ST]);
-        a->side[SL] = q->side[SL], a->ns[SL] = q->ns[SL];
-        a = &part[nparts++]; /* right */
-        *a = (rect){
-            sx,  q->y0, q->x1, q->y1, {cls_sb, q->cls[1], q->cls[2], cls_st},
-            {0}, {0},   NULL,  0};
-        sub_side(q, SB, sx, q->x1, &a->side[SB], &a->ns[SB]);
-        a->side[SR] = q->side[SR], a->ns[SR] = q->ns[SR];
-        sub_side(q, ST, sx, q->x1, &a->side[ST], &a->ns[ST]);
-        a->side[SL] = vb, a->ns[SL] = nvb;
+        ok = run_rect(w, a, depth + 1);
     }
-    else
-    {
-        const int cls_sl = class_at(q, SL, sy);
-        int cls_sr = class_at(q, SR, sy);
-        nhl = divide(w, (wm_pt){q->x0, sy}, 0, q->x1 - q->x0, cls_sl, &cls_sr,
-                     hl);
-        if (nhl < 0)
-        {
-            free(buf);
-            return 0;
-        }
-        rect *a = &part[nparts++]; /* bottom */
-        *a = (rect){
-            q->x0, q->y0, q->x1, sy, {q->cls[0], q->cls[1], cls_sr, cls_sl},
-            {0},   {0},   NULL,  0};
-        a->side[SB] = q->side[SB], a->ns[SB] = q->ns[SB];
-        sub_side(q, SR, q->y0, sy, &a->side[SR], &a->ns[SR]);
-        a->side[ST] = hl, a->ns[ST] = nhl;
-        sub_side(q, SL, q->y0, sy, &a->side[SL], &a->ns[SL]);
-        a = &part[nparts++]; /* top */
-        *a = (rect){
-            q->x0, sy,  q->x1, q->y1, {cls_sl, cls_sr, q->cls[2], q->cls[3]},
-            {0},   {0}, NULL,  0};
-        a->side[SB] = hl, a->ns[SB] = nhl;
-        sub_side(q, SR, sy, q->y1, &a->side[SR], &a->ns[SR]);
-        a->side[ST] = q->side[ST], a->ns[ST] = q->ns[ST];
-        sub_side(q, SL, sy, q->y1, &a->side[SL], &a->ns[SL]);
-    }
-    for (int i = 0; i < nparts && ok; i++)
-    {
-        part[i].seed = q->seed;
-        part[i].nseed = q->nseed;
-        ok = run_rect(w, &part[i], depth + 1);
-    }
-    free(buf);
+    free(mid);
     return ok;
 }
 
-/* The boundary inside q. */
+/* Divides q across its longer side (where a position is free of
+ * crossings, the parts at least 3 units wide) and runs the parts; returns
+ * 1, 0 when out of memory, or -1 when q cannot be divided. */
+static int divide_rect(walker *w, const rect *q, int depth)
+{
+    if (depth >= MAXDEPTH)
+        return -1;
+    const int32_t sx =
+        q->x1 - q->x0 >= 6 ? split_at(q, q->x0, q->x1, SB, ST) : -1;
+    const int32_t sy =
+        q->y1 - q->y0 >= 6 ? split_at(q, q->y0, q->y1, SL, SR) : -1;
+    if (sx < 0 && sy < 0)
+        return -1;
+    const int vertical = sx > 0 && (sy < 0 || q->x1 - q->x0 >= q->y1 - q->y0);
+    return split(w, q, vertical, vertical ? sx : sy, depth);
+}
+
 /* Whether a seed lies in q (sides included). */
 static int has_seed(const rect *q)
 {
@@ -900,13 +852,10 @@ static int run_rect(walker *w, const rect *q, int depth)
     {
         /* nothing crosses the sides: an input smaller than the rectangle
          * may still lie inside; divide towards its seed */
-        if (!has_seed(q) || depth >= MAXDEPTH)
+        if (!has_seed(q))
             return 1;
-        const int32_t sx =
-            q->x1 - q->x0 >= 6 ? split_at(q, q->x0, q->x1, SB, ST) : -1;
-        const int32_t sy =
-            q->y1 - q->y0 >= 6 ? split_at(q, q->y0, q->y1, SL, SR) : -1;
-        return sx > 0 || sy > 0 ? split(w, q, sx, sy, depth) : 1;
+        const int d = divide_rect(w, q, depth);
+        return d < 0 ? 1 : d;
     }
     xing *x = malloc((size_t)k * sizeof *x);
     if (!x)
@@ -916,19 +865,8 @@ static int run_rect(walker *w, const rect *q, int depth)
     if (k == 2 && x[0].side != x[1].side)
         ok = x[0].out ? w->emit(w->user, x[0].p, x[1].p)
                       : w->emit(w->user, x[1].p, x[0].p);
-    else
-    {
-        const int32_t sx = q->x1 - q->x0 >= 6 && depth < MAXDEPTH
-                               ? split_at(q, q->x0, q->x1, SB, ST)
-                               : -1;
-        const int32_t sy = q->y1 - q->y0 >= 6 && depth < MAXDEPTH
-                               ? split_at(q, q->y0, q->y1, SL, SR)
-                               : -1;
-        if (sx > 0 || sy > 0)
-            ok = split(w, q, sx, sy, depth);
-        else
-            ok = pair_leaf(w, q, x, k);
-    }
+    else if ((ok = divide_rect(w, q, depth)) < 0)
+        ok = pair_leaf(w, q, x, k);
     free(x);
     return ok;
 }
@@ -960,12 +898,13 @@ static int cell_side(const wm_field *f, const wm_hidden *h, int32_t c,
     return 1;
 }
 
-wm_status wm_hidden_cell(const wm_field *f, wm_probe *probe, const wm_hidden *h,
-                         int32_t c, int32_t r, wm_segment_fn emit, void *user)
+/* The boundary inside ambiguous cell (c, r). */
+static int hidden_cell(const wm_field *f, wm_probe *probe, const wm_hidden *h,
+                       int32_t c, int32_t r, wm_segment_fn emit, void *user)
 {
     int32_t *buf = malloc(4 * MAXCROSS * sizeof *buf);
     if (!buf)
-        return WM_ERR_NOMEM;
+        return 0;
     const int32_t X = c * WM_Q, Y = r * WM_Q;
     rect q = {X,
               Y,
@@ -992,5 +931,18 @@ wm_status wm_hidden_cell(const wm_field *f, wm_probe *probe, const wm_hidden *h,
     walker w = {probe, emit, user};
     const int ok = run_rect(&w, &q, 0);
     free(buf);
-    return ok ? WM_OK : WM_ERR_NOMEM;
+    return ok;
+}
+
+wm_status wm_hidden_cells(const wm_field *f, wm_probe *probe,
+                          const wm_hidden *h, wm_segment_fn emit, void *user)
+{
+    for (size_t i = 0; i < h->ncell; i++)
+    {
+        int32_t c, r;
+        cell_of(f, h->cell[i], &c, &r);
+        if (!hidden_cell(f, probe, h, c, r, emit, user))
+            return WM_ERR_NOMEM;
+    }
+    return WM_OK;
 }

@@ -90,7 +90,7 @@ extern "C"
     typedef int (*wm_segment_fn)(void *user, wm_pt a, wm_pt b);
 
     /**
-     * The boundary inside ambiguous cell (c, r): its sides' crossings (the
+     * The boundary inside every ambiguous cell of h: its sides' crossings (the
      * sampled one of a side whose samples differ in class, computed as
      * contour.c does; the hidden ones otherwise) are joined by subdividing
      * the cell, each new dividing segment's crossings found exactly, until
@@ -99,9 +99,9 @@ extern "C"
      * points inside the cell; they are simple and meet only at their ends.
      * Returns WM_OK, or WM_ERR_NOMEM.
      */
-    wm_status wm_hidden_cell(const wm_field *f, wm_probe *probe,
-                             const wm_hidden *h, int32_t c, int32_t r,
-                             wm_segment_fn emit, void *user);
+    wm_status wm_hidden_cells(const wm_field *f, wm_probe *probe,
+                              const wm_hidden *h, wm_segment_fn emit,
+                              void *user);
 
 #ifdef __cplusplus
 }
