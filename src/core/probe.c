@@ -435,7 +435,8 @@ static int lake_intervals(wm_probe *in, wm_pt P, int vertical, int32_t L,
                           size_t ntg, size_t *niv)
 {
     const wm_scene *s = in->s;
-    qsort(in->tg, ntg, sizeof *in->tg, cmp_toggle);
+    if (ntg > 1)
+        qsort(in->tg, ntg, sizeof *in->tg, cmp_toggle);
     /* every polygon odd at P (the ray) or toggling inside: its pieces */
     size_t nt = lake_parities(in, P.x, P.y, 0);
     for (size_t i = 0; i < ntg; i++)
@@ -623,7 +624,8 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
     if (ntg || in->nledge)
         if (!lake_intervals(in, P, vertical, L, (size_t)ntg, &niv))
             return -1;
-    qsort(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
+    if (niv > 1)
+        qsort(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
     return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
 }
 

@@ -508,9 +508,12 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
         }
     if (!add_seeds(h, f, probe) || !exact_sides(h, f, probe))
         goto nomem;
-    qsort(h->edge, h->nedge, sizeof *h->edge, cmp_edge);
+    if (h->ncell == 0)
+        return WM_OK; /* nothing hidden (and no edge listed) */
+    if (h->nedge > 1)
+        qsort(h->edge, h->nedge, sizeof *h->edge, cmp_edge);
     qsort(h->cell, h->ncell, sizeof *h->cell, cmp_u64);
-    if (h->ncell && !mark_near(h, f))
+    if (!mark_near(h, f))
         goto nomem;
     return WM_OK;
 nomem:
