@@ -36,12 +36,11 @@ extern "C"
         wm_cells cells;
         uint32_t *wide;
         size_t nwide;
-        /* lake edges of the block's polygons, built on the first query that
-         * needs them: `ledge` (owned) lists them as (edge, polygon slot k);
+        /* lake edges of the block's polygons, built by wm_probe_init:
+         * `ledge` (owned) lists them as (edge, polygon slot k);
          * `lcells` by cell as the rivers (within reach), `lwide` those
          * touching too many cells, `lrows` by band of 4 sample rows (those
          * whose half-open y range meets the band: the ray crossings) */
-        int lakes_built;
         struct wm_probe_edge *ledge;
         size_t nledge;
         wm_cells lcells, lrows;
