@@ -275,7 +275,19 @@ def water(inputs):
         parts.extend(_polygonal(_make_valid(p)))
     if not parts:
         return GeometryCollection()
-    return unary_union(parts)
+    return _drop_degenerate(unary_union(parts))
+
+
+def _drop_degenerate(geom):
+    """geom without the degenerate rings GEOS's union may leave (a hole
+    thinner than a micron, 2 * area / perimeter, where two inputs share a
+    boundary up to rounding): no land or water is there, and they would
+    count as boundary."""
+    def ok(ring):
+        return 2.0 * Polygon(ring).area > 1e-6 * ring.length
+    polys = [Polygon(p.exterior, [r for r in p.interiors if ok(r)])
+             for p in polygons_of(geom) if ok(p.exterior)]
+    return MultiPolygon(polys) if len(polys) != 1 else polys[0]
 
 
 def block_box(block, block_size):

@@ -119,5 +119,74 @@ int main(void)
     wm_rings_free(&r0);
     wm_rings_free(&r1);
     wm_scene_free(&s);
+
+    /* A stream 0.72 px wide (x 99.30 .. 100.02) covering the sample column
+     * x = 100 by 0.02 px: its far bank is 0.64 px from the interpolated
+     * crossing of the edges from x = 99 (a loose edge): exact with the
+     * search. */
+    su_init(&s, 256);
+    const double stream[] = {99.66, 20, 99.66, 200};
+    su_river(&s, stream, 2, 0.36);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 0, &r0), WM_OK, "extract from the samples alone");
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_OK(!vertex_near(&r0, 99.30 * WM_Q, 100 * WM_Q, 0.1 * WM_Q),
+           "samples alone: the far bank a fraction of a pixel off");
+    TAP_OK(vertex_near(&r1, 99.30 * WM_Q, 100 * WM_Q, 1.0),
+           "loose edge: the far bank exactly");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    wm_rings_free(&r0);
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
+
+    /* A stream 0.1 px wide through the samples (100, 100) and (101, 101)
+     * of a saddle cell, bending a quarter pixel off the cell's centre: the
+     * centre is land, yet the stream is one piece. */
+    su_init(&s, 256);
+    const double bend[] = {80, 80, 100, 100, 100.8, 100.4, 101, 101, 120, 120};
+    su_river(&s, bend, 5, 0.05);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 0, &r0), WM_OK, "extract from the samples alone");
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_OK(count_sign(&r0, 1) > 1, "samples alone: the stream dashed");
+    TAP_EQ(count_sign(&r1, 1), 1, "saddle cell: the stream in one piece");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    wm_rings_free(&r0);
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
+
+    /* A stream 0.3 px wide ending at x = 100.5 (its tip at 100.65): inside
+     * the cell whose sample (100, 100) it covers; the tip is seeded. */
+    su_init(&s, 256);
+    const double ends[] = {50, 100.1, 100.5, 100.1};
+    su_river(&s, ends, 2, 0.15);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_OK(vertex_near(&r1, 100.65 * WM_Q, 100.1 * WM_Q, 8.0),
+           "the stream's tip within 1/32 px");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
+
+    /* An island of 0.4 px that three rivers enclose (y > 100.3, x > 100.3,
+     * x + y < 201) inside a cell whose four samples are water: no single
+     * input marks it; its corners seed the cell. */
+    su_init(&s, 256);
+    const double ra[] = {80, 97.3, 120, 97.3}, rb[] = {97.3, 80, 97.3, 120},
+                 rc[] = {85, 120.243, 120.243, 85};
+    su_river(&s, ra, 2, 3.0);
+    su_river(&s, rb, 2, 3.0);
+    su_river(&s, rc, 2, 3.0);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 0, &r0), WM_OK, "extract from the samples alone");
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_EQ(count_sign(&r0, 0), 0, "samples alone: no island");
+    TAP_EQ(count_sign(&r1, 0), 1, "exact search: the island");
+    TAP_OK(vertex_near(&r1, 100.3 * WM_Q, 100.3 * WM_Q, 4.0),
+           "the island's corner within 1/64 px");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    wm_rings_free(&r0);
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
     return TAP_DONE();
 }

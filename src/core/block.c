@@ -49,8 +49,10 @@ static wm_status copy_ring(const wm_rings *in, size_t i, wm_rings *out)
 }
 
 /* Thinner than this (twice the area over the perimeter, lattice units) a
- * ring inside the block is a remnant of rounding, not a feature. */
-#define WM_THIN 1.5
+ * ring inside the block is a remnant of rounding, not a feature: the exact
+ * search keeps a feature narrower than a unit one unit wide, so a real one
+ * is at least that thick. */
+#define WM_THIN 1.0
 
 /* Whether ring i of `in` lies inside the block square [0, S]^2 (no vertex
  * on it) and is thinner than WM_THIN: what is left where a feature narrows

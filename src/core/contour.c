@@ -17,19 +17,16 @@
  * water->land ("out") or land->water ("in"). A segment runs from an out
  * edge to an in edge. With one out edge the pairing is forced.
  *
- * Saddle rule (two out edges: diagonal corners 0,2 or 1,3 are water): the
- * class of the cell's centre decides; if it is water the water corners are
- * joined through the centre and each out edge pairs with the next in edge
- * counter-clockwise, otherwise they are separated and each out edge pairs
- * with the previous in edge. The centre's class is the sign of the union's
- * signed distance there, evaluated from the inputs (probe.h): a saddle is
- * where two boundaries pass between the samples, typically a strip of land
- * or water narrower than a pixel running diagonally, and its true class at
- * the centre keeps the strip connected where the samples alone cannot tell.
- * Without a probe (unit tests of the field alone) the mean of the four
- * corner values (summed in corner order), the bilinear interpolant's value
- * at the centre as in GDAL's contour, decides. Either way the decision
- * belongs to the cell alone (a cell is in one block), so it is
+ * Saddle rule (two out edges: diagonal corners 0,2 or 1,3 are water): with
+ * the inputs at hand (a probe) a saddle cell is ambiguous and rebuilt
+ * exactly (subpixel.c): which diagonal the boundary separates is decided
+ * by the inputs, not the samples. Without a probe (unit tests of the field
+ * alone) the mean of the four corner values (summed in corner order), the
+ * bilinear interpolant's value at the centre as in GDAL's contour, decides:
+ * if it is water the water corners are joined through the centre and each
+ * out edge pairs with the next in edge counter-clockwise, otherwise they
+ * are separated and each out edge pairs with the previous in edge. The
+ * decision belongs to the cell alone (a cell is in one block), so it is
  * deterministic, and the two segments cut opposite corners and cannot meet.
  *
  * Closing: chains that end on the block square are joined by walking the
@@ -88,8 +85,6 @@ typedef struct
 typedef struct
 {
     int32_t n;            /* cells per side */
-    wm_probe *probe;      /* saddle decisions and hidden crossings; NULL: mean
-                             of the corners, no hidden crossings */
     wm_hidden hid;        /* hidden crossings and ambiguous cells */
     int32_t cur_c, cur_r; /* the ambiguous cell being done */
     seg *segs;
@@ -146,10 +141,7 @@ static int cell(state *s, int32_t c, int32_t r, const float *p)
         pt[EL] = wm_contour_crossing(v[0], v[3], X, Y, 1);
     const int saddle = w[0] == w[2] && w[1] == w[3];
     int joined = 0;
-    if (saddle && s->probe)
-        joined = wm_probe_distance(s->probe, X + WM_Q / 2, Y + WM_Q / 2,
-                                   WM_PROBE_REACH) <= 0;
-    else if (saddle)
+    if (saddle)
     {
         const double mean = ((double)v[0] + v[1] + v[2] + v[3]) / 4.0;
         joined = mean <= 0;
@@ -339,40 +331,42 @@ static size_t link_tiles(state *s, size_t *bnd)
     return nbnd;
 }
 
-/* Rows of tile t's ambiguous cells as bit masks (cmask[row], bit: column
- * in the tile); *hc walks the sorted keys tile by tile. Returns whether
- * there is any. */
-static int ambiguous_of_tile(const wm_hidden *h, size_t t, size_t *hc,
-                             uint64_t *cmask)
+/* Rows of tile t's cells among the sorted keys k[0 .. n) as bit masks
+ * (mask[row], bit: column in the tile); *at walks the keys tile by tile.
+ * Returns whether there is any. */
+static int cells_of_tile(const uint64_t *k, size_t n, size_t t, size_t *at,
+                         uint64_t *mask)
 {
     int has = 0;
-    memset(cmask, 0, WM_TILE * sizeof *cmask);
-    while (*hc < h->ncell && (h->cell[*hc] >> 32) < t)
-        (*hc)++;
-    for (; *hc < h->ncell && (h->cell[*hc] >> 32) == t; (*hc)++)
+    memset(mask, 0, WM_TILE * sizeof *mask);
+    while (*at < n && (k[*at] >> 32) < t)
+        (*at)++;
+    for (; *at < n && (k[*at] >> 32) == t; (*at)++)
     {
-        const uint32_t local = (uint32_t)(h->cell[*hc] & 0xffffffffu);
-        cmask[local / WM_TILE] |= UINT64_C(1) << (local % WM_TILE);
+        const uint32_t local = (uint32_t)(k[*at] & 0xffffffffu);
+        mask[local / WM_TILE] |= UINT64_C(1) << (local % WM_TILE);
         has = 1;
     }
     return has;
 }
 
-/* Segments s0.. of a tile near ambiguous cells: an in or out edge on a
- * side of an ambiguous cell takes that side's exact crossing, if listed,
- * and is linked through the hash. */
-static void mark_links(state *s, const wm_field *f, size_t s0)
+/* Segments s0.. of the tile from cell (c0, r0) whose cells are set in
+ * lmask: an in or out edge takes its exact crossing where one is listed;
+ * on a side of an ambiguous cell it is linked through the hash. */
+static void mark_links(state *s, const wm_field *f, size_t s0, int32_t c0,
+                       int32_t r0, const uint64_t *lmask)
 {
     for (size_t i = s0; i < s->nsegs; i++)
     {
         seg *g = &s->segs[i];
+        if (!((lmask[g->r - r0] >> (g->c - c0)) & 1))
+            continue;
         for (int in = 0; in < 2; in++)
         {
             const int side = in ? g->iside : g->oside;
-            if (!wm_hidden_is_cell(&s->hid, f, g->c + side_dc[side],
-                                   g->r + side_dr[side]))
-                continue;
-            g->flags |= in ? LINK_IN : LINK_OUT;
+            if (wm_hidden_is_cell(&s->hid, f, g->c + side_dc[side],
+                                  g->r + side_dr[side]))
+                g->flags |= in ? LINK_IN : LINK_OUT;
             wm_hidden_side_crossing(&s->hid, f, g->c, g->r, side,
                                     in ? &g->in_pt : &g->out_pt);
         }
@@ -380,8 +374,8 @@ static void mark_links(state *s, const wm_field *f, size_t s0)
 }
 
 /* The segments of the cells of mixed tile t (tile-major order) that are
- * not ambiguous; *hc walks the ambiguous cells. Returns 0 when out of
- * memory. */
+ * not ambiguous; hc[0] walks the ambiguous cells, hc[1] the linked ones.
+ * Returns 0 when out of memory. */
 static int tile_segments(state *s, const wm_field *f, size_t t, size_t *hc)
 {
     const int32_t n = s->n;
@@ -394,7 +388,7 @@ static int tile_segments(state *s, const wm_field *f, size_t t, size_t *hc)
     const size_t s0 = s->nsegs;
     /* ambiguous cells are done apart (cmask: per row of the tile) */
     uint64_t cmask[WM_TILE];
-    ambiguous_of_tile(&s->hid, t, hc, cmask);
+    cells_of_tile(s->hid.cell, s->hid.ncell, t, &hc[0], cmask);
     /* water bits of the tile's sample rows; a cell needs work only where
      * its four corner bits differ */
     uint64_t below = water_bits(f->val[t]);
@@ -414,8 +408,8 @@ static int tile_segments(state *s, const wm_field *f, size_t t, size_t *hc)
         }
         below = above;
     }
-    if (s->hid.near && s->hid.near[t])
-        mark_links(s, f, s0);
+    if (cells_of_tile(s->hid.link, s->hid.nlink, t, &hc[1], cmask))
+        mark_links(s, f, s0, c0, r0, cmask);
     const tilesegs ts = {s0, s->nsegs, c0, r0};
     s->tiles[s->ntiles++] = ts;
     return 1;
@@ -445,7 +439,6 @@ wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
     state s;
     memset(&s, 0, sizeof s);
     s.n = f->w - 1;
-    s.probe = probe;
     size_t *slot = NULL, *bnd = NULL;
     entry *ent = NULL;
     size_t nent = 0;
@@ -456,9 +449,9 @@ wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
     if (probe && (st = wm_hidden_find(f, probe, &s.hid, ctx)) != WM_OK)
         goto cleanup;
 
-    size_t hc = 0; /* the ambiguous cells of the tiles so far */
+    size_t hc[2] = {0, 0}; /* ambiguous and linked cells of the tiles so far */
     for (size_t t = 0; t < (size_t)f->ntx * (size_t)f->nty; t++)
-        if (f->kind[t] == WM_TILE_MIXED && !tile_segments(&s, f, t, &hc))
+        if (f->kind[t] == WM_TILE_MIXED && !tile_segments(&s, f, t, hc))
             goto nomem;
     const size_t ntileseg = s.nsegs;
     if (s.hid.ncell &&

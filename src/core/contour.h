@@ -30,9 +30,10 @@ extern "C"
                                  const wm_ctx *ctx);
 
     /**
-     * wm_contour_extract deciding saddle cells by the class of the cell's
-     * centre, from `probe` (the block's; NULL: the mean of the four corner
-     * values, as wm_contour_extract does).
+     * wm_contour_extract with the block's inputs at hand (`probe`; NULL: as
+     * wm_contour_extract): where the samples cannot decide (subpixel.h:
+     * hidden and loose crossings, saddle cells, features inside one cell)
+     * the boundary is rebuilt exactly from the inputs.
      */
     wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
                                         wm_rings *out, const wm_ctx *ctx);

@@ -11,12 +11,9 @@
  * volume data", which does the same per cell from normals).
  *
  * Method, per block:
- *   1. boundary primitives of the inputs in reach: for a river segment its
- *      two offset lines and two end circles (a circle two consecutive
- *      segments share taken once), for a lake edge the edge;
- *   2. their pairwise intersections (primitives bucketed in a grid; pairs
- *      from the same input item, or with a circle and boxes apart, skipped),
- *      kept when strictly inside the block;
+ *   1-2. the candidate corners: crossings of two input boundaries strictly
+ *      inside the block, near the boundary (corners.c, shared with the
+ *      sub-pixel search);
  *   3. for each candidate C (lattice-snapped), the nearest ring edge; C is
  *      tried when it is 1/4 .. 16 pixels away (closer: nothing to
  *      recover), on that edge or, failing that, on a neighbouring one (a
@@ -32,13 +29,14 @@
  *      pass; up to four passes.
  * Floating point decides only which corners to try, never validity.
  *
- * Cost: O(primitives + pairs sharing a grid cell) to find candidates; the
- * field discards the buried ones at O(1) each; every remaining candidate
+ * Cost: finding the candidates, corners.c; every candidate
  * costs a local ring-grid search and, when it is more than 1/4 pixel away,
  * distance evaluations against the block's inputs (O(inputs in reach)).
  * Candidates that reach that point are few: one per corner of the union.
  */
 #include "crease.h"
+
+#include "corners.h"
 
 #include "contour.h"
 #include "field.h"
@@ -49,16 +47,6 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-typedef struct
-{
-    double x0, y0, x1, y1; /* segment, or circle centre (x0,y0) radius x1 */
-    int circle;
-    uint32_t item; /* its input item, or NO_ITEM: a circle two consecutive
-                      segments share */
-} prim;
-
-#define NO_ITEM UINT32_MAX
 
 static uint64_t ckey(int64_t cx, int64_t cy)
 {
@@ -93,135 +81,14 @@ typedef struct
     int state;
 } corner;
 
-static int cmp_pt(const void *a, const void *b)
-{
-    const wm_pt *x = a, *y = b;
-    if (x->x != y->x)
-        return x->x < y->x ? -1 : 1;
-    return (x->y > y->y) - (x->y < y->y);
-}
-
 static int cmp_ins(const void *a, const void *b)
 {
     const insertion *x = a, *y = b;
     return (x->seg > y->seg) - (x->seg < y->seg);
 }
 
-/* growable array helper */
-static int push(void **buf, size_t *n, size_t *cap, const void *item,
-                size_t size)
-{
-    if (!wm_grow(buf, cap, *n + 1, size))
-        return 0;
-    memcpy((char *)*buf + *n * size, item, size);
-    (*n)++;
-    return 1;
-}
-
-/* ---- candidate corners: intersections of primitives ------------------- */
-
 /* How many scattered field reads ahead a loop prefetches. */
 #define PREFETCH 8
-
-/* The sample nearest to lattice coordinate v >= 0. */
-static int32_t sample_of(int32_t v)
-{
-    return (v + WM_Q / 2) / WM_Q;
-}
-
-typedef struct
-{
-    double x, y;
-} dpt;
-
-static int seg_seg(const prim *a, const prim *b, dpt *out)
-{
-    const double rx = a->x1 - a->x0, ry = a->y1 - a->y0;
-    const double sx = b->x1 - b->x0, sy = b->y1 - b->y0;
-    const double den = rx * sy - ry * sx;
-    if (den == 0)
-        return 0;
-    const double qx = b->x0 - a->x0, qy = b->y0 - a->y0;
-    const double t = (qx * sy - qy * sx) / den, u = (qx * ry - qy * rx) / den;
-    if (t < 0 || t > 1 || u < 0 || u > 1)
-        return 0;
-    out[0].x = a->x0 + t * rx;
-    out[0].y = a->y0 + t * ry;
-    return 1;
-}
-
-static int seg_circle(const prim *a, const prim *c, dpt *out)
-{
-    const double dx = a->x1 - a->x0, dy = a->y1 - a->y0;
-    const double fx = a->x0 - c->x0, fy = a->y0 - c->y0, r = c->x1;
-    const double A = dx * dx + dy * dy, B = 2 * (fx * dx + fy * dy);
-    const double C = fx * fx + fy * fy - r * r;
-    const double disc = B * B - 4 * A * C;
-    if (A == 0 || disc < 0)
-        return 0;
-    const double sq = sqrt(disc);
-    int n = 0;
-    for (int k = -1; k <= 1; k += 2)
-    {
-        const double t = (-B + k * sq) / (2 * A);
-        if (t >= 0 && t <= 1)
-        {
-            out[n].x = a->x0 + t * dx;
-            out[n].y = a->y0 + t * dy;
-            n++;
-        }
-    }
-    return n;
-}
-
-static int circle_circle(const prim *a, const prim *b, dpt *out)
-{
-    const double dx = b->x0 - a->x0, dy = b->y0 - a->y0;
-    const double d2 = dx * dx + dy * dy, d = sqrt(d2);
-    const double r0 = a->x1, r1 = b->x1;
-    if (d == 0 || d > r0 + r1 || d < fabs(r0 - r1))
-        return 0;
-    const double l = (r0 * r0 - r1 * r1 + d2) / (2 * d);
-    const double h2 = r0 * r0 - l * l, h = h2 > 0 ? sqrt(h2) : 0;
-    const double mx = a->x0 + l * dx / d, my = a->y0 + l * dy / d;
-    out[0].x = mx + h * dy / d;
-    out[0].y = my - h * dx / d;
-    out[1].x = mx - h * dy / d;
-    out[1].y = my + h * dx / d;
-    return 2;
-}
-
-static int intersect(const prim *a, const prim *b, dpt *out)
-{
-    if (!a->circle && !b->circle)
-        return seg_seg(a, b, out);
-    if (a->circle && b->circle)
-        return circle_circle(a, b, out);
-    return a->circle ? seg_circle(b, a, out) : seg_circle(a, b, out);
-}
-
-/* llround of a positive x (the hits lie inside the block), exactly. */
-static int32_t round_pos(double x)
-{
-    const int32_t r = (int32_t)x; /* truncation: floor for x >= 0 */
-    return r + (x - r >= 0.5);    /* x - r is exact */
-}
-
-static void prim_box(const prim *p, double *b)
-{
-    if (p->circle)
-    {
-        b[0] = p->x0 - p->x1;
-        b[1] = p->y0 - p->x1;
-        b[2] = p->x0 + p->x1;
-        b[3] = p->y0 + p->x1;
-        return;
-    }
-    b[0] = fmin(p->x0, p->x1);
-    b[1] = fmin(p->y0, p->y1);
-    b[2] = fmax(p->x0, p->x1);
-    b[3] = fmax(p->y0, p->y1);
-}
 
 /* True when the new edges a - c - b (c on the union's boundary) stay within
  * half a pixel of that boundary.
@@ -230,6 +97,15 @@ static void prim_box(const prim *p, double *b)
 static int follows_boundary(wm_probe *in, wm_pt a, wm_pt c, wm_pt b)
 {
     const double reach = 4.0 * WM_Q;
+    /* the triangle a c b changes class (water is left of a -> b: a corner
+     * on the left moves the boundary into water, so the triangle becomes
+     * land); its centroid must be of that class. Where two inputs share a
+     * boundary inside the union (lakes with a common edge) the distance is
+     * 0 along it, and this is what rejects a spike along it. */
+    const double gx = ((double)a.x + b.x + c.x) / 3.0,
+                 gy = ((double)a.y + b.y + c.y) / 3.0;
+    if ((wm_probe_distance(in, gx, gy, reach) > 0) != (wm_orient(a, b, c) > 0))
+        return 0;
     for (int e = 0; e < 2; e++)
     {
         const wm_pt p = e ? b : a;
@@ -612,7 +488,7 @@ typedef struct
 
 static edge_key make_key(wm_pt a, wm_pt b)
 {
-    const int a_first = cmp_pt(&a, &b) < 0;
+    const int a_first = wm_pt_cmp(a, b) < 0;
     const edge_key k = {a_first ? a : b, a_first ? b : a};
     return k;
 }
@@ -620,8 +496,8 @@ static edge_key make_key(wm_pt a, wm_pt b)
 static int cmp_key(const void *a, const void *b)
 {
     const edge_key *x = a, *y = b;
-    const int c = cmp_pt(&x->lo, &y->lo);
-    return c ? c : cmp_pt(&x->hi, &y->hi);
+    const int c = wm_pt_cmp(x->lo, y->lo);
+    return c ? c : wm_pt_cmp(x->hi, y->hi);
 }
 
 /* One pass: tries the open corners against the current rings (with hot,
@@ -711,7 +587,7 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
             continue;
         const size_t kb = succ(rings, g.ring_of, ka);
         const insertion x = {c, ka};
-        if (!push((void **)&ins, &nins, &inscap, &x, sizeof x))
+        if (!wm_push((void **)&ins, &nins, &inscap, &x, sizeof x))
             goto nomem;
         cd->state = C_DONE;
         split[ka] = 1;
@@ -799,175 +675,18 @@ wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
 wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
                                    wm_rings *rings, const wm_ctx *ctx)
 {
-    wm_status st = WM_OK;
-    prim *pr = NULL;
-    size_t npr = 0, prcap = 0;
-    wm_cells pg;       /* primitives by cell */
-    double *pb = NULL; /* their boxes */
-    memset(&pg, 0, sizeof pg);
-    wm_pt *cand = NULL; /* primitive crossings, then the kept ones */
-    corner *cs = NULL;
-    size_t ncand = 0, candcap = 0, nkept = 0;
     wm_probe *in = probe;
-    const wm_scene *s = in->s;
-
-    if (rings->nrings == 0 || in->nsegs + in->npolys < 1)
+    if (rings->nrings == 0)
         return WM_OK;
-    const int32_t S = s->n * WM_Q;
-
-    /* 1. primitives, local doubles */
-    const double lo = -4.0 * WM_Q, hi = (double)S + 4.0 * WM_Q;
-    for (size_t i = 0; i < in->nsegs; i++)
-    {
-        const wm_river_seg *q = &s->segs[in->segs[i]];
-        const double ax = (double)(q->ax - in->X0),
-                     ay = (double)(q->ay - in->Y0);
-        const double bx2 = (double)(q->bx - in->X0),
-                     by2 = (double)(q->by - in->Y0);
-        const double dx = bx2 - ax, dy = by2 - ay, l = sqrt(dx * dx + dy * dy);
-        prim p[4];
-        int np = 0;
-        if (l > 0)
-        {
-            const double nx = -dy / l * q->r, ny = dx / l * q->r;
-            p[np++] =
-                (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, in->segs[i]};
-            p[np++] =
-                (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, in->segs[i]};
-        }
-        /* end circles, each once: the start circle of a segment that
-         * continues the previous one (same vertex, same radius) is that
-         * one's end circle, which then belongs to neither (it pairs with
-         * the primitives of both, as the two copies did) */
-        const wm_river_seg *prev = i > 0 ? &s->segs[in->segs[i - 1]] : NULL;
-        if (prev && prev->bx == q->ax && prev->by == q->ay && prev->r == q->r)
-            pr[npr - 1].item = NO_ITEM;
-        else
-            p[np++] = (prim){ax, ay, q->r, 0, 1, in->segs[i]};
-        if (l > 0)
-            p[np++] = (prim){bx2, by2, q->r, 0, 1, in->segs[i]};
-        for (int k = 0; k < np; k++)
-            if (!push((void **)&pr, &npr, &prcap, &p[k], sizeof *p))
-                goto nomem;
-    }
-    for (size_t k = 0; k < in->npolys; k++)
-    {
-        const uint32_t pidx = in->polys[k];
-        for (size_t e = s->poly_start[pidx]; e < s->poly_start[pidx + 1]; e++)
-        {
-            const wm_lake_edge *q = &s->edges[e];
-            prim p = {(double)(q->ax - in->X0),
-                      (double)(q->ay - in->Y0),
-                      (double)(q->bx - in->X0),
-                      (double)(q->by - in->Y0),
-                      0,
-                      (uint32_t)(s->nsegs + e)};
-            double b[4];
-            prim_box(&p, b);
-            if (b[2] < lo || b[0] > hi || b[3] < lo || b[1] > hi)
-                continue;
-            if (!push((void **)&pr, &npr, &prcap, &p, sizeof p))
-                goto nomem;
-        }
-    }
-    if (npr >= NO_ITEM || s->nsegs + s->nedges >= NO_ITEM)
-        goto cleanup; /* items and primitives need 32 bits */
-
-    /* 2. candidates: pairs sharing a grid cell (cells over the block grown
-     * by 4 px), found once (in the cell holding the intersection) */
-    const double PC = 16.0 * WM_Q;
-    const int64_t cmin = (int64_t)floor(lo / PC);
-    const int64_t cside = (int64_t)floor(hi / PC) - cmin + 1;
-    wm_cells_reset(&pg, (int32_t)cside);
-    pb = malloc((4 * npr + 1) * sizeof *pb);
-    if (!pb)
-        goto nomem;
-    for (size_t i = 0; i < npr; i++)
-    {
-        prim_box(&pr[i], pb + 4 * i);
-        double b[4];
-        b[0] = fmax(pb[4 * i], lo);
-        b[1] = fmax(pb[4 * i + 1], lo);
-        b[2] = fmin(pb[4 * i + 2], hi);
-        b[3] = fmin(pb[4 * i + 3], hi);
-        if (b[0] > b[2] || b[1] > b[3])
-            continue;
-        const int32_t x0 = (int32_t)((int64_t)floor(b[0] / PC) - cmin);
-        const int32_t x1 = (int32_t)((int64_t)floor(b[2] / PC) - cmin);
-        const int32_t y0 = (int32_t)((int64_t)floor(b[1] / PC) - cmin);
-        const int32_t y1 = (int32_t)((int64_t)floor(b[3] / PC) - cmin);
-        for (int32_t cy = y0; cy <= y1; cy++)
-            for (int32_t cx = x0; cx <= x1; cx++)
-                if (!wm_cells_add(&pg, cx, cy, (uint32_t)i))
-                    goto nomem;
-    }
-    if (wm_cells_index(&pg) != WM_OK)
-        goto nomem;
-    for (int32_t row = 0; row < pg.side; row++)
-        for (size_t cell = pg.row[row]; cell < pg.row[row + 1]; cell++)
-        {
-            const size_t a = pg.start[cell], z = pg.start[cell + 1];
-            const int64_t cx = pg.col[cell] + cmin, cy = row + cmin;
-            for (size_t i = a; i < z; i++)
-                for (size_t j = i + 1; j < z; j++)
-                {
-                    const prim *p = &pr[pg.item[i]], *q = &pr[pg.item[j]];
-                    if (p->item == q->item && p->item != NO_ITEM)
-                        continue;
-                    /* with a circle, boxes apart by more than any rounding
-                     * give no hit; two nearly parallel lines may (their
-                     * crossing is noise, far off), and are kept as they
-                     * were */
-                    const double *bp = pb + 4 * pg.item[i],
-                                 *bq = pb + 4 * pg.item[j];
-                    if ((p->circle || q->circle) &&
-                        (bp[0] > bq[2] + 4 || bq[0] > bp[2] + 4 ||
-                         bp[1] > bq[3] + 4 || bq[1] > bp[3] + 4))
-                        continue;
-                    dpt hit[2];
-                    const int nh = intersect(p, q, hit);
-                    for (int h = 0; h < nh; h++)
-                    {
-                        if (floor(hit[h].x / PC) != (double)cx ||
-                            floor(hit[h].y / PC) != (double)cy)
-                            continue;
-                        if (!(hit[h].x >= WM_Q && hit[h].x <= S - WM_Q &&
-                              hit[h].y >= WM_Q && hit[h].y <= S - WM_Q))
-                            continue; /* keep a pixel off the block square */
-                        const wm_pt c = {round_pos(hit[h].x),
-                                         round_pos(hit[h].y)};
-                        if (!push((void **)&cand, &ncand, &candcap, &c,
-                                  sizeof c))
-                            goto nomem;
-                    }
-                }
-        }
-    /* the field is 1-Lipschitz: a point of the boundary is within 0.71 px
-     * of a sample valued within 0.71 px of 0; anything else is buried under
-     * another input. The samples are scattered over the block's field:
-     * fetched PREFETCH hits ahead. The kept ones are packed in place. */
-    for (size_t i = 0; i < ncand; i++)
-    {
-        if (i + PREFETCH < ncand)
-            wm_field_prefetch(f, sample_of(cand[i + PREFETCH].x),
-                              sample_of(cand[i + PREFETCH].y));
-        const wm_pt c = cand[i];
-        if (fabsf(wm_field_at(f, sample_of(c.x), sample_of(c.y))) <= 0.75f)
-            cand[nkept++] = c;
-    }
-    ncand = nkept;
-    if (ncand == 0)
-        goto cleanup;
-    qsort(cand, ncand, sizeof *cand, cmp_pt);
-    /* distinct candidates; open unless within a quarter pixel of the
-     * contour edge of their own cell (a ring edge: the nearest edge search
-     * would find it or a nearer one and skip them) */
-    size_t nu = 0;
-    for (size_t i = 0; i < ncand; i++)
-        if (nu == 0 || !wm_pt_eq(cand[i], cand[nu - 1]))
-            cand[nu++] = cand[i];
-    ncand = nu;
-    cs = malloc(ncand * sizeof *cs);
+    wm_status st = wm_corners_find(in, f, ctx);
+    if (st != WM_OK || in->ncorner == 0)
+        return st;
+    const wm_pt *cand = in->corner;
+    const size_t ncand = in->ncorner;
+    /* open unless within a quarter pixel of the contour edge of their own
+     * cell (a ring edge: the nearest edge search would find it or a nearer
+     * one and skip them) */
+    corner *cs = malloc(ncand * sizeof *cs);
     if (!cs)
         goto nomem;
     for (size_t i = 0; i < ncand; i++)
@@ -1013,10 +732,6 @@ wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
 nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory recovering corners");
 cleanup:
-    free(pr);
-    wm_cells_free(&pg);
-    free(pb);
     free(cs);
-    free(cand);
     return st;
 }

@@ -68,6 +68,15 @@ int wm_grow(void **buf, size_t *cap, size_t need, size_t elem)
     return 1;
 }
 
+int wm_push(void **buf, size_t *n, size_t *cap, const void *item, size_t elem)
+{
+    if (!wm_grow(buf, cap, *n + 1, elem))
+        return 0;
+    memcpy((char *)*buf + *n * elem, item, elem);
+    (*n)++;
+    return 1;
+}
+
 wm_status wm_rings_push_grow(wm_rings *r, wm_pt p)
 {
     if (!wm_grow((void **)&r->pts, &r->pts_cap, r->npts + 1, sizeof *r->pts))

@@ -40,6 +40,14 @@ extern "C"
         return a.x == b.x && a.y == b.y;
     }
 
+    /** Lexicographic order of points (x, then y): -1, 0 or 1. */
+    static inline int wm_pt_cmp(wm_pt a, wm_pt b)
+    {
+        if (a.x != b.x)
+            return a.x < b.x ? -1 : 1;
+        return (a.y > b.y) - (a.y < b.y);
+    }
+
     /** True when p lies on the closed segment [a, b] (p collinear with it and
      *  inside its bounding box). */
     static inline int wm_on_segment(wm_pt a, wm_pt b, wm_pt p)

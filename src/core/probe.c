@@ -668,6 +668,7 @@ void wm_probe_free(wm_probe *p)
     free(p->touched);
     free(p->iv);
     free(p->tg);
+    free(p->corner);
     const wm_scene *s = p->s;
     memset(p, 0, sizeof *p);
     p->s = s;

@@ -46,6 +46,12 @@ extern "C"
         wm_cells lcells, lrows;
         uint32_t *lwide;
         size_t nlwide;
+        /** the exact crossings of two input boundaries strictly inside the
+         *  block, near the boundary, lattice-snapped, sorted, distinct
+         *  (owned; found once by wm_corners_find) */
+        wm_pt *corner;
+        size_t ncorner;
+        int corners_found;
         /* scratch of a query (owned): per polygon slot, and growable lists */
         uint8_t *par;
         double *dmin;

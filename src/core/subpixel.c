@@ -1,47 +1,63 @@
 /*
- * subpixel.c - boundary crossings the samples cannot see, found from the
- * exact inputs, and the cells they make ambiguous.
+ * subpixel.c - where the samples cannot decide the boundary, found from the
+ * exact inputs: hidden and loose crossings, and the cells they make
+ * ambiguous.
  *
  * Why: marching squares sees the boundary only where two neighbouring
- * samples differ in class. A strip of land narrower than a pixel between
- * two rivers, the tip of a junction wedge, a stream narrower than a pixel,
+ * samples differ in class, and puts it where the linear interpolation of
+ * their values vanishes. A strip of land narrower than a pixel between two
+ * rivers, the tip of a junction wedge, a stream narrower than a pixel,
  * cross a cell edge twice between two samples of one class: the samples
  * skip them, and the strip comes out cut short, dashed, or as a row of
- * specks where it happens to cover a sample.
+ * specks. Across such a thin feature the interpolation is wrong too: a
+ * sample inside a stream 0.2 pixel wide is valued by the nearer bank, and
+ * the crossing towards the far bank lands up to a pixel off.
  *
- * Rule: the field is 1-Lipschitz and |d| never exceeds the distance to the
- * boundary, so an edge whose samples are of one class with |va| + |vb| > 1
- * pixel holds no boundary point; every other edge of one class "cannot
- * decide". Its crossings are computed exactly from the inputs (probe.h:
- * capsule and lake intervals along the edge). A cell with a side holding
- * such crossings is ambiguous; its boundary is rebuilt by subdividing it:
- * each dividing segment's crossings are again found exactly, until every
- * piece holds one boundary segment between two of its sides (a straight
- * segment, as marching squares draws) or is 2-3 lattice units wide (then
- * the crossings are paired by the class of the piece's centre).
+ * Rule: the field is 1-Lipschitz and |v| never exceeds the distance to the
+ * boundary, so no boundary point lies within |v| of a sample; the balls of
+ * the samples around an edge leave a feasible part of it where alone the
+ * boundary may meet it (feasible()). An edge of one class with a feasible
+ * part "cannot decide" (with |va| + |vb| > 1 pixel it never can). An edge
+ * whose samples differ is "loose" when its feasible part reaches more than
+ * LOOSE pixel from the interpolated crossing. A saddle cell cannot decide
+ * which diagonal the boundary separates. Their crossings are computed
+ * exactly from the inputs (probe.h: capsule and lake intervals along the
+ * edge). A cell with a side holding hidden crossings (or three on a
+ * loose side), and a saddle cell, is ambiguous; its boundary is rebuilt by
+ * subdividing it: each dividing segment's crossings are again found
+ * exactly, until every piece holds one boundary segment between two of its
+ * sides (a straight segment, as marching squares draws) or is 3-5 lattice
+ * units wide (then its crossings are paired). A loose side with one
+ * crossing keeps marching squares' segment, moved to the exact crossing.
  *
  * Why nothing is missed: a boundary component that meets an edge of the
  * sample grid either changes the class between its samples (marching
  * squares sees it) or crosses it an even number of times between samples
- * of one class, which the Lipschitz bound does not exclude, so the edge is
- * searched exactly. What stays unseen is a component that meets no edge:
- * inside one cell and touching none of its sides (an island or a pond
- * smaller than a cell, between samples), and a crossing pair hidden on an
- * edge whose samples already differ in class (three crossings on one
- * edge).
+ * of one class, where the balls leave a feasible part, so the edge is
+ * searched exactly. A component that meets no edge lies inside one cell;
+ * seeds reach it: a point of each input smaller than two pixels, the tip
+ * of each river cap narrower than 1.5 pixels, and each corner of the union
+ * (two input boundaries crossing, corners.c) in a cell whose four samples
+ * are of one class. What stays unseen: three crossings on an edge whose
+ * samples differ that is not loose, and a feature narrower than the
+ * lattice's rounding (block.c drops rings thinner than 1.5 units).
  *
  * Seams: an edge's crossings depend on its two samples and the inputs
  * only, with every coordinate difference formed in integers, so both
- * blocks sharing an edge of their square find the same ones; subdivision
- * happens inside cells, which belong to one block.
+ * blocks sharing an edge of their square find the same ones; an edge on
+ * the square is judged loose from the samples on its line alone, which
+ * both blocks hold; subdivision happens inside cells, which belong to one
+ * block.
  *
- * Cost: one exact search (the items near the edge) per edge of a mixed
- * tile that cannot decide; subdivision only in ambiguous cells, O(depth)
+ * Cost: a few float operations per edge of a mixed tile within a pixel of
+ * the boundary; one exact search (the items near the edge) per edge that
+ * cannot decide or is loose; subdivision only in ambiguous cells, O(depth)
  * searches per crossing.
  */
 #include "subpixel.h"
 
 #include "contour.h"
+#include "corners.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -52,6 +68,11 @@
 /* Subdivision depth bound (a cell is 256 units: 7 halvings of each side
  * reach parts 3 units wide). */
 #define MAXDEPTH 32
+/* river caps narrower than this radius get their tips seeded (lattice
+ * units): a wider cap's arc stays within a quarter pixel of its chords */
+#define THIN_CAP (1.5 * WM_Q)
+/* the most an interpolated crossing may stray along its edge (pixels) */
+#define LOOSE 0.4f
 
 static uint64_t edge_id(int32_t n, int32_t c, int32_t r, int vertical)
 {
@@ -213,42 +234,82 @@ WM_CLONES static void row_bits(const float *row, uint64_t *near,
     }
 }
 
-/* How far from its own end the samples of one column (or row) of the
- * tile certify an edge clear: the edge's end sample a (value va) and the
- * samples k = 1, 2 rows (columns) beside it, at stride `step` in the tile's
- * value array, of the same class. A sample valued v at distance k from the
- * edge's line clears the part of the edge within sqrt(v^2 - k^2) of its
- * foot (the field is 1-Lipschitz and |v| never exceeds the distance to the
- * boundary). lo, hi: how many rows (columns) the tile has on each side. */
-static float reach_of(const float *a, ptrdiff_t step, int lo, int hi)
+/* An edge of a tile's sample array, from the sample at a to a + along;
+ * across: the stride beside its line. before, after: whether the tile holds
+ * the sample before a and the one after a + along on the line; lo, hi: how
+ * many rows (columns) beside the line it holds on each side (2 are used). */
+typedef struct
 {
-    const int wa = a[0] <= 0;
-    float h = fabsf(a[0]);
+    const float *a;
+    ptrdiff_t along, across;
+    int before, after, lo, hi;
+} edge_view;
+
+/* How far the samples of one foot clear the line of an edge: the sample
+ * at s and those k = 1, 2 rows beside it, each valued v clearing
+ * sqrt(v^2 - k^2) of the line on both sides of its foot (the field is
+ * 1-Lipschitz and |v| never exceeds the distance to the boundary, in land
+ * and in water). */
+static float clear_of(const float *s, const edge_view *e)
+{
+    float h2 = s[0] * s[0];
     for (int k = 1; k <= 2; k++)
         for (int sgn = -1; sgn <= 1; sgn += 2)
-        {
-            if ((sgn < 0 ? lo : hi) < k)
-                continue;
-            const float v = a[sgn * k * step];
-            const float e = v * v - (float)(k * k);
-            if ((v <= 0) == wa && e > h * h)
-                h = sqrtf(e);
-        }
-    return h;
+            if ((sgn < 0 ? e->lo : e->hi) >= k)
+            {
+                const float v = s[sgn * k * e->across];
+                const float e2 = v * v - (float)(k * k);
+                h2 = e2 > h2 ? e2 : h2;
+            }
+    return sqrtf(h2);
 }
 
-/* Whether the edge from the sample at a to the one at a + along (values in
- * the tile's array; the rows or columns beside it at stride `across`, lo
- * and hi of them available on each side) cannot decide: both of one class
- * (the caller checks) and the clear parts from both ends, by reach_of, do
- * not cover it (with a margin of 1/1000 pixel for the float values). */
-static int undecided(const float *a, ptrdiff_t along, ptrdiff_t across, int lo,
-                     int hi)
+/* [*L, *U]: the part of the edge (pixels from a) that no sample's ball
+ * clears, where alone the boundary may meet it. The feet -1 and 0 of the
+ * edge's line clear a prefix, 1 and 2 a suffix. lazy: stop once the edge
+ * is cleared (L > U). */
+static void feasible(const edge_view *e, int lazy, float *L, float *U)
 {
-    if (fabsf(a[0]) + fabsf(a[along]) > 1.0f)
+    *L = clear_of(e->a, e);
+    *U = 1.0f - clear_of(e->a + e->along, e);
+    if (e->before && !(lazy && *L > *U))
+    {
+        const float l = clear_of(e->a - e->along, e) - 1.0f;
+        *L = l > *L ? l : *L;
+    }
+    if (e->after && !(lazy && *L > *U))
+    {
+        const float u = 2.0f - clear_of(e->a + 2 * e->along, e);
+        *U = u < *U ? u : *U;
+    }
+}
+
+/* Whether an edge whose two samples are of one class cannot decide: some
+ * part of it is clear of every ball (with a margin of 1/1000 pixel for the
+ * float values); with |va| + |vb| > 1 pixel it is always decided. */
+static int undecided(const edge_view *e)
+{
+    if (fabsf(e->a[0]) + fabsf(e->a[e->along]) > 1.0f)
         return 0;
-    return reach_of(a, across, lo, hi) + reach_of(a + along, across, lo, hi) <=
-           1.001f;
+    float L, U;
+    feasible(e, 1, &L, &U);
+    return L <= U + 0.001f;
+}
+
+/* Whether the interpolated crossing of an edge whose samples differ in
+ * class may lie more than LOOSE pixel from where the boundary meets it. A
+ * straight boundary leaves a short feasible part around the interpolated
+ * point; a thin feature (the far side of a stream narrower than a pixel,
+ * the land between two rivers) a long one. */
+static int loose(const edge_view *e)
+{
+    const float va = fabsf(e->a[0]), vb = fabsf(e->a[e->along]);
+    if (va + vb >= 1.0f - LOOSE)
+        return 0;
+    const float p = va / (va + vb); /* interpolated, pixels from a */
+    float L, U;
+    feasible(e, 0, &L, &U);
+    return p - L > LOOSE || U - p > LOOSE;
 }
 
 /* Cell (c, r) of key k. */
@@ -277,6 +338,21 @@ static int exact_edge(wm_hidden *h, const wm_field *f, wm_probe *probe,
     return k;
 }
 
+/* Lists the exact crossings of a loose edge from sample (c, r): one
+ * replaces the interpolated crossing in both its cells (see link_cells);
+ * three or more make its cells ambiguous. Returns 0 when out of memory. */
+static int loose_edge(wm_hidden *h, const wm_field *f, wm_probe *probe,
+                      int32_t c, int32_t r, int vertical)
+{
+    const int k = exact_edge(h, f, probe, c, r, vertical);
+    if (k < 0)
+        return 0;
+    if (k < 3)
+        return 1;
+    return vertical ? add_cell(h, f, c - 1, r) && add_cell(h, f, c, r)
+                    : add_cell(h, f, c, r - 1) && add_cell(h, f, c, r);
+}
+
 /* The sides of the ambiguous cells whose samples differ in class (but
  * those on the block square: the block across could not know) get their
  * exact crossings, listed; three or more make the cell across ambiguous
@@ -287,6 +363,8 @@ static int exact_sides(wm_hidden *h, const wm_field *f, wm_probe *probe)
     keyset cells = {NULL, 0, 0}, edges = {NULL, 0, 0};
     int ok = 1;
     size_t m = 0;
+    for (size_t i = 0; i < h->nedge && ok; i++)
+        ok = keyset_add(&edges, h->edge[i].id) >= 0; /* loose edges */
     for (size_t i = 0; i < h->ncell && ok; i++)
     {
         const int a = keyset_add(&cells, h->cell[i]);
@@ -364,6 +442,58 @@ static int add_seed(wm_hidden *h, const wm_field *f, int64_t x, int64_t y)
     return add_cell(h, f, c, r);
 }
 
+/* Seeds the tips of thin segment g's caps that lie on the union's
+ * boundary: a cap narrower than a pixel may end inside a cell whose
+ * samples one side of the strip covers, where the cell's crossings agree
+ * with the samples and only its seed shows the strip going on. The tip of
+ * a cap that continues into the next segment of its line lies inside that
+ * segment's capsule and is skipped (a floating-point choice: a seed only
+ * adds exact work). */
+static int add_tips(wm_hidden *h, const wm_field *f, wm_probe *probe,
+                    const wm_river_seg *g)
+{
+    const double ux = (double)(g->bx - g->ax), uy = (double)(g->by - g->ay);
+    const double len = hypot(ux, uy);
+    if (len == 0)
+        return 1;
+    for (int end = 0; end < 2; end++)
+    {
+        const double sg = end ? g->r / len : -g->r / len;
+        const int64_t x =
+            (end ? g->bx : g->ax) - probe->X0 + (int64_t)llround(sg * ux);
+        const int64_t y =
+            (end ? g->by : g->ay) - probe->Y0 + (int64_t)llround(sg * uy);
+        const int64_t n = (int64_t)(f->w - 1) * WM_Q;
+        if (x < 0 || y < 0 || x >= n || y >= n)
+            continue;
+        if (wm_probe_distance(probe, (double)x, (double)y, g->r + 2) < -1.0)
+            continue;
+        if (!add_seed(h, f, x, y))
+            return 0;
+    }
+    return 1;
+}
+
+/* Seeds corner p of the union's boundary (probe->corner) when the four
+ * samples of its cell are of one class: the corner of an island smaller
+ * than a pixel that several rivers enclose, or of a pond between banks,
+ * which no side of the cell may cross. A corner buried under a third
+ * input is skipped (a floating-point choice: a seed only adds exact
+ * work). */
+static int corner_seed(wm_hidden *h, const wm_field *f, wm_probe *probe,
+                       wm_pt p)
+{
+    const int32_t c = p.x / WM_Q, r = p.y / WM_Q;
+    const int w = wm_field_at(f, c, r) <= 0;
+    if ((wm_field_at(f, c + 1, r) <= 0) != w ||
+        (wm_field_at(f, c, r + 1) <= 0) != w ||
+        (wm_field_at(f, c + 1, r + 1) <= 0) != w)
+        return 1;
+    if (wm_probe_distance(probe, p.x, p.y, 2.0) < -1.0)
+        return 1;
+    return add_seed(h, f, p.x, p.y);
+}
+
 /* Seeds the cells of the inputs smaller than two pixels: lake rings (the
  * runs of edges of a polygon that close) and river segments with their
  * radius, by their first point. */
@@ -405,7 +535,12 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
         if ((double)(dx > dy ? dx : dy) + 2 * g->r < (double)small &&
             !add_seed(h, f, g->ax - probe->X0, g->ay - probe->Y0))
             return 0;
+        if (g->r < THIN_CAP && !add_tips(h, f, probe, g))
+            return 0;
     }
+    for (size_t i = 0; i < probe->ncorner; i++)
+        if (!corner_seed(h, f, probe, probe->corner[i]))
+            return 0;
     /* by cell: (cell, index) pairs sorted, then both arrays permuted */
     if (h->nseed < 2)
         return 1;
@@ -432,20 +567,152 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
     return 1;
 }
 
-/* Flags the tiles holding an ambiguous cell and the tiles next to them. */
-static int mark_near(wm_hidden *h, const wm_field *f)
+/* Adds the key of cell (c, r), if in the block, to h->link. */
+static int add_link(wm_hidden *h, const wm_field *f, int32_t c, int32_t r)
 {
-    h->near = calloc((size_t)f->ntx * (size_t)f->nty + 1, 1);
-    if (!h->near)
+    const int32_t n = f->w - 1;
+    if (c < 0 || r < 0 || c >= n || r >= n)
+        return 1;
+    if (!wm_grow((void **)&h->link, &h->linkcap, h->nlink + 1, sizeof *h->link))
         return 0;
+    h->link[h->nlink++] = cell_key(f, c, r);
+    return 1;
+}
+
+/* h->link: the cells next to an ambiguous cell and the two cells of each
+ * edge with one listed crossing (a loose edge, or a side of an ambiguous
+ * cell), sorted, distinct: those whose segments take listed crossings. */
+static int link_cells(wm_hidden *h, const wm_field *f)
+{
     for (size_t i = 0; i < h->ncell; i++)
     {
-        const int64_t t = (int64_t)(h->cell[i] >> 32);
-        const int32_t tx = (int32_t)(t % f->ntx), ty = (int32_t)(t / f->ntx);
-        for (int32_t y = ty - 1; y <= ty + 1; y++)
-            for (int32_t x = tx - 1; x <= tx + 1; x++)
-                if (x >= 0 && y >= 0 && x < f->ntx && y < f->nty)
-                    h->near[(size_t)y * (size_t)f->ntx + (size_t)x] = 1;
+        int32_t c, r;
+        cell_of(f, h->cell[i], &c, &r);
+        if (!add_link(h, f, c - 1, r) || !add_link(h, f, c + 1, r) ||
+            !add_link(h, f, c, r - 1) || !add_link(h, f, c, r + 1))
+            return 0;
+    }
+    const int64_t stride = (int64_t)f->w; /* edge ids: see subpixel.h */
+    for (size_t i = 0; i < h->nedge; i++)
+    {
+        if (h->edge[i].n != 1)
+            continue;
+        const int64_t e = (int64_t)(h->edge[i].id >> 1);
+        const int32_t c = (int32_t)(e % stride), r = (int32_t)(e / stride);
+        const int vertical = (int)(h->edge[i].id & 1);
+        if (!add_link(h, f, c, r) ||
+            !add_link(h, f, c - vertical, r - !vertical))
+            return 0;
+    }
+    if (h->nlink < 2)
+        return 1;
+    qsort(h->link, h->nlink, sizeof *h->link, cmp_u64);
+    size_t m = 1;
+    for (size_t i = 1; i < h->nlink; i++)
+        if (h->link[i] != h->link[m - 1])
+            h->link[m++] = h->link[i];
+    h->nlink = m;
+    return 1;
+}
+
+/* A mixed tile being screened: its values, first cell and end (exclusive,
+ * clamped to the block's n cells). */
+typedef struct
+{
+    const float *v;
+    int32_t c0, r0, c1, r1, n;
+} tile;
+
+/* Edge from sample (c0 + q, r) of T along x or y. On the block square
+ * (square != 0) it sees no row beside its line, which differ between the
+ * two blocks sharing it. */
+static edge_view view_of(const tile *T, int32_t q, int32_t r, int vertical,
+                         int square)
+{
+    const ptrdiff_t W = WM_TILE + 1;
+    const int32_t cw = T->c1 - T->c0;
+    edge_view e = {T->v + (ptrdiff_t)(r - T->r0) * W + q,
+                   1,
+                   W,
+                   q > 0,
+                   q + 2 <= cw,
+                   r - T->r0,
+                   T->r1 - r};
+    if (vertical)
+        e = (edge_view){e.a, W, 1, r > T->r0, r + 2 <= T->r1, q, cw - q};
+    if (square)
+        e.lo = e.hi = 0;
+    return e;
+}
+
+/* Screens the edges of row r of T at the columns set in m: along x or y,
+ * whose samples are of one class (kind 0: searched when they cannot
+ * decide) or differ (kind 1: searched when loose). */
+static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe,
+                  const tile *T, int32_t r, uint64_t m, int vertical, int kind)
+{
+    while (m)
+    {
+        const int32_t q = __builtin_ctzll(m);
+        m &= m - 1;
+        const int32_t c = T->c0 + q;
+        if (kind == 0)
+        {
+            const edge_view e = view_of(T, q, r, vertical, 0);
+            if (undecided(&e) &&
+                !search_edge(h, f, probe, c, r, vertical, e.a[0] <= 0))
+                return 0;
+            continue;
+        }
+        const int sq = vertical ? c == 0 || c == T->n : r == 0 || r == T->n;
+        const edge_view e = view_of(T, q, r, vertical, sq);
+        if (loose(&e) && !loose_edge(h, f, probe, c, r, vertical))
+            return 0;
+    }
+    return 1;
+}
+
+/* Screens mixed tile T: per row, the edges both of whose samples lie
+ * within a pixel of the boundary (those of one class that cannot decide,
+ * those of two that are loose) and the saddle cells (corners alternate:
+ * which diagonal the boundary separates is an exact question). */
+static int screen_tile(wm_hidden *h, const wm_field *f, wm_probe *probe,
+                       const tile *T)
+{
+    /* a tile screens its edges but those of its top row and right column,
+     * which the tile beyond screens (it is mixed too: an edge within a
+     * pixel of the boundary has no sample at the clamp band), or which lie
+     * on the block square */
+    const int32_t re = T->r1 == T->n ? T->r1 : T->r1 - 1;
+    const int32_t ce = T->c1 == T->n ? T->c1 : T->c1 - 1;
+    const uint64_t hcols = (UINT64_C(1) << (T->c1 - T->c0)) - 1;
+    const uint64_t vcols = (UINT64_C(1) << (ce - T->c0 + 1)) - 1;
+    uint64_t near, water, near2 = 0, water2 = 0;
+    row_bits(T->v, &near, &water);
+    for (int32_t r = T->r0; r <= re; r++)
+    {
+        const int up = r < T->r1;
+        if (up)
+            row_bits(T->v + (ptrdiff_t)(r - T->r0 + 1) * (WM_TILE + 1), &near2,
+                     &water2);
+        /* horizontal edges of row r, vertical ones up from it */
+        const uint64_t hn = near & (near >> 1) & hcols;
+        const uint64_t hx = water ^ (water >> 1);
+        const uint64_t vn = up ? near & near2 & vcols : 0;
+        const uint64_t vx = water ^ water2;
+        const uint64_t saddle = up ? hx & ~(water ^ (water2 >> 1)) &
+                                         ~((water >> 1) ^ water2) & hcols
+                                   : 0;
+        if (!screen(h, f, probe, T, r, hn & ~hx, 0, 0) ||
+            !screen(h, f, probe, T, r, vn & ~vx, 1, 0) ||
+            !screen(h, f, probe, T, r, hn & hx, 0, 1) ||
+            !screen(h, f, probe, T, r, vn & vx, 1, 1))
+            return 0;
+        for (uint64_t m = saddle; m; m &= m - 1)
+            if (!add_cell(h, f, T->c0 + __builtin_ctzll(m), r))
+                return 0;
+        near = near2;
+        water = water2;
     }
     return 1;
 }
@@ -462,58 +729,30 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
             if (f->kind[t] != WM_TILE_MIXED)
                 continue;
             const int32_t c0 = tx * WM_TILE, r0 = ty * WM_TILE;
-            const int32_t c1 = c0 + WM_TILE < n ? c0 + WM_TILE : n;
-            const int32_t r1 = r0 + WM_TILE < n ? r0 + WM_TILE : n;
-            /* a tile searches its edges but those of its top row and right
-             * column, which the tile beyond searches (it is mixed too: an
-             * edge that cannot decide has no sample at the clamp band), or
-             * which lie on the block square */
-            const int32_t re = r1 == n ? r1 : r1 - 1;
-            const int32_t ce = c1 == n ? c1 : c1 - 1;
-            const float *v = f->val[t];
-            const uint64_t hcols = (UINT64_C(1) << (c1 - c0)) - 1;
-            const uint64_t vcols = (UINT64_C(1) << (ce - c0 + 1)) - 1;
-            uint64_t near, water, near2 = 0, water2 = 0;
-            row_bits(v, &near, &water);
-            for (int32_t r = r0; r <= re; r++)
-            {
-                const float *row = v + (r - r0) * (WM_TILE + 1);
-                if (r < r1)
-                    row_bits(row + WM_TILE + 1, &near2, &water2);
-                /* horizontal edges of row r, vertical ones up from it:
-                 * both samples near, of one class */
-                uint64_t hm =
-                    near & (near >> 1) & ~(water ^ (water >> 1)) & hcols;
-                uint64_t vm =
-                    r < r1 ? near & near2 & ~(water ^ water2) & vcols : 0;
-                while (hm)
-                {
-                    const int32_t q = __builtin_ctzll(hm);
-                    hm &= hm - 1;
-                    if (undecided(row + q, 1, WM_TILE + 1, r - r0, r1 - r) &&
-                        !search_edge(h, f, probe, c0 + q, r, 0, row[q] <= 0))
-                        goto nomem;
-                }
-                while (vm)
-                {
-                    const int32_t q = __builtin_ctzll(vm);
-                    vm &= vm - 1;
-                    if (undecided(row + q, WM_TILE + 1, 1, q, c1 - c0 - q) &&
-                        !search_edge(h, f, probe, c0 + q, r, 1, row[q] <= 0))
-                        goto nomem;
-                }
-                near = near2;
-                water = water2;
-            }
+            const tile T = {f->val[t],
+                            c0,
+                            r0,
+                            c0 + WM_TILE < n ? c0 + WM_TILE : n,
+                            r0 + WM_TILE < n ? r0 + WM_TILE : n,
+                            n};
+            if (!screen_tile(h, f, probe, &T))
+                goto nomem;
         }
+    const wm_status st = wm_corners_find(probe, f, ctx);
+    if (st != WM_OK)
+    {
+        wm_hidden_free(h);
+        return st;
+    }
     if (!add_seeds(h, f, probe) || !exact_sides(h, f, probe))
         goto nomem;
-    if (h->ncell == 0)
-        return WM_OK; /* nothing hidden (and no edge listed) */
+    if (h->ncell == 0 && h->nedge == 0)
+        return WM_OK; /* nothing hidden */
     if (h->nedge > 1)
         qsort(h->edge, h->nedge, sizeof *h->edge, cmp_edge);
-    qsort(h->cell, h->ncell, sizeof *h->cell, cmp_u64);
-    if (!mark_near(h, f))
+    if (h->ncell > 1)
+        qsort(h->cell, h->ncell, sizeof *h->cell, cmp_u64);
+    if (!link_cells(h, f))
         goto nomem;
     return WM_OK;
 nomem:
@@ -528,7 +767,7 @@ void wm_hidden_free(wm_hidden *h)
     free(h->edge);
     free(h->off);
     free(h->cell);
-    free(h->near);
+    free(h->link);
     free(h->seed);
     free(h->seedcell);
     memset(h, 0, sizeof *h);
@@ -848,28 +1087,28 @@ static int has_seed(const rect *q)
     return 0;
 }
 
+/* The boundary inside q: one segment when two crossings on different
+ * sides and no seed leave nothing to decide, else q divided, down to
+ * rectangles too small to divide, whose crossings are paired. */
 static int run_rect(walker *w, const rect *q, int depth)
 {
     const int k = q->ns[0] + q->ns[1] + q->ns[2] + q->ns[3];
-    if (k == 0)
-    {
-        /* nothing crosses the sides: an input smaller than the rectangle
-         * may still lie inside; divide towards its seed */
-        if (!has_seed(q))
-            return 1;
-        const int d = divide_rect(w, q, depth);
-        return d < 0 ? 1 : d;
-    }
-    xing *x = malloc((size_t)k * sizeof *x);
+    const int seeded = has_seed(q);
+    if (k == 0 && !seeded)
+        return 1;
+    xing *x = malloc(((size_t)k + 1) * sizeof *x);
     if (!x)
         return 0;
     boundary(q, x);
-    int ok;
-    if (k == 2 && x[0].side != x[1].side)
+    const int simple = k == 2 && x[0].side != x[1].side;
+    int ok = -1;
+    if (seeded || !simple)
+        ok = divide_rect(w, q, depth);
+    if (ok < 0 && simple)
         ok = x[0].out ? w->emit(w->user, x[0].p, x[1].p)
                       : w->emit(w->user, x[1].p, x[0].p);
-    else if ((ok = divide_rect(w, q, depth)) < 0)
-        ok = pair_leaf(w, q, x, k);
+    else if (ok < 0)
+        ok = k ? pair_leaf(w, q, x, k) : 1;
     free(x);
     return ok;
 }

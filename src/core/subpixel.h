@@ -38,32 +38,37 @@ extern "C"
         size_t noff, offcap;
         uint64_t *cell; /**< ambiguous cells, sorted, distinct (owned) */
         size_t ncell, cellcap;
-        uint8_t *near; /**< per tile: 1 when a cell of it or of a tile next
-                            to it is ambiguous (owned; NULL if none is) */
-        wm_pt *seed;   /**< a point on each input smaller than two pixels
-                            (a lake ring, a short river segment), by cell:
-                            seed[i] is in cell seedcell[i], sorted (owned) */
+        uint64_t *link; /**< cells whose segments take listed crossings:
+                             those next to an ambiguous cell, and the two of
+                             each edge with one listed crossing (sorted,
+                             distinct; owned) */
+        size_t nlink, linkcap;
+        wm_pt *seed; /**< points of features that may lie inside one
+                          cell (a point of an input smaller than two
+                          pixels, a thin cap's tip, a corner in a cell of
+                          one class), by cell: seed[i] is in cell
+                          seedcell[i], sorted (owned) */
         uint64_t *seedcell;
         size_t nseed, seedcap, seedcellcap;
     } wm_hidden;
 
     /**
-     * Finds the hidden crossings of the block field f (the block's: f->w ==
-     * f->h == n + 1): every edge of a mixed tile whose two samples are of
-     * one class and too close to the boundary to exclude it (|va| + |vb| <=
-     * 1 pixel: the field is 1-Lipschitz, so a larger sum proves the edge
-     * clear) gets the exact crossings of the union's boundary with it
-     * (wm_probe_crossings); an edge with some is listed, and both its cells
-     * are ambiguous. Then every side of an ambiguous cell whose samples
-     * differ in class, but those on the block square, gets its crossings
-     * exactly too (listed, even when it has one); three or more make the
-     * cell across ambiguous as well, and so on. An edge of one class is a
-     * pure function of its two samples and the inputs, and an edge of the
-     * block square whose samples differ keeps its sampled crossing, so the
-     * two blocks sharing it agree on it. An input smaller than two pixels (a
-     * lake ring, a river segment with its width) may lie inside one cell,
-     * meeting no edge: a point of it seeds its cell, which is ambiguous
-     * too. Caller frees h with wm_hidden_free().
+     * Finds where the samples of the block field f (the block's: f->w ==
+     * f->h == n + 1) cannot decide the boundary (subpixel.c has the rule):
+     * every edge of a mixed tile whose two samples are of one class and
+     * whose feasible part (what the samples' balls leave) is not empty, and
+     * every edge whose samples differ and whose interpolated crossing may
+     * stray more than LOOSE pixel, gets the exact crossings of the union's
+     * boundary with it (wm_probe_crossings) and is listed. The cells of an
+     * edge of one class with crossings, of a loose edge with three or more,
+     * saddle cells, and the cells of seeds (small inputs, thin caps'
+     * tips, corners in cells of one class) are ambiguous. Then every side
+     * of an ambiguous cell whose samples differ in class, but those on the
+     * block square, gets its crossings exactly too (listed, even when it has
+     * one); three or more make the cell across ambiguous as well, and so on.
+     * What is listed on the block square is a pure function of the
+     * samples on the square and the inputs, so the two blocks sharing it
+     * agree on it. Caller frees h with wm_hidden_free().
      */
     wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
                              const wm_ctx *ctx);
@@ -77,10 +82,11 @@ extern "C"
 
     /**
      * The exact crossing on side `side` (0 bottom, 1 right, 2 top, 3 left)
-     * of cell (c, r), when that side is one of an ambiguous cell whose
-     * samples differ in class and it holds one crossing: then *p is it and
-     * 1 is returned (marching squares must use it there, not its
-     * interpolated one, so that both cells of the side agree); else 0.
+     * of cell (c, r), when that side is listed with one crossing (a loose
+     * edge, or a side of an ambiguous cell whose samples differ in class):
+     * then *p is it and 1 is returned (marching squares must use it there,
+     * not its interpolated one, so that both cells of the side agree);
+     * else 0.
      */
     int wm_hidden_side_crossing(const wm_hidden *h, const wm_field *f,
                                 int32_t c, int32_t r, int side, wm_pt *p);
@@ -94,7 +100,8 @@ extern "C"
      * sampled one of a side whose samples differ in class, computed as
      * contour.c does; the hidden ones otherwise) are joined by subdividing
      * the cell, each new dividing segment's crossings found exactly, until
-     * every piece holds one boundary segment or is 2-3 lattice units wide.
+     * every piece holds one boundary segment between two of its sides and
+     * no seed, or is 3-5 lattice units wide.
      * Segments end on crossings (shared with the neighbouring cells) or on
      * points inside the cell; they are simple and meet only at their ends.
      * Returns WM_OK, or WM_ERR_NOMEM.

@@ -119,6 +119,15 @@ extern "C"
     int wm_grow(void **buf, size_t *cap, size_t need, size_t elem);
 
     /**
+     * Appends the `elem` bytes at item to the array *buf of *n elements
+     * (capacity *cap), growing it as wm_grow does.
+     *
+     * @return 1, or 0 when out of memory (the array is left as it was)
+     */
+    int wm_push(void **buf, size_t *n, size_t *cap, const void *item,
+                size_t elem);
+
+    /**
      * Items by cell of a side x side grid, only the occupied cells stored:
      * building and memory grow with the (cell, item) pairs, not with the
      * grid's area. Invariants once indexed: the occupied cells of row y are
