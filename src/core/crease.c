@@ -292,7 +292,16 @@ typedef struct
     const ringgrid *g;
     double x, y, best;
     size_t edge;
+    int32_t S; /* the block square's side: its edges are never split */
 } nearest;
+
+/* Whether edge a -> b lies on the block square [0, S]^2 (never split:
+ * seams stay exact). */
+static int on_square(wm_pt a, wm_pt b, int32_t S)
+{
+    return (a.x == b.x && (a.x == 0 || a.x == S)) ||
+           (a.y == b.y && (a.y == 0 || a.y == S));
+}
 
 /* Distance from (x, y) to the ring edge a -> b. */
 static double edge_dist(wm_pt a, wm_pt b, double x, double y)
@@ -308,8 +317,10 @@ static int nearest_fn(void *arg, size_t k)
 {
     nearest *n = arg;
     const wm_rings *r = n->g->r;
-    const double d =
-        edge_dist(r->pts[k], r->pts[succ(r, n->g->ring_of, k)], n->x, n->y);
+    const wm_pt a = r->pts[k], b = r->pts[succ(r, n->g->ring_of, k)];
+    if (on_square(a, b, n->S))
+        return 1;
+    const double d = edge_dist(a, b, n->x, n->y);
     if (d < n->best || (d == n->best && k < n->edge))
     {
         n->best = d;
@@ -385,9 +396,7 @@ static int can_insert(wm_probe *in, ringgrid *g, size_t ka, wm_pt c, int32_t S,
     const wm_pt a = rings->pts[ka], b = rings->pts[kb];
     if (split[ka] || wm_orient(a, b, c) == 0)
         return 0;
-    /* never touch an edge on the block square */
-    if ((a.x == b.x && (a.x == 0 || a.x == S)) ||
-        (a.y == b.y && (a.y == 0 || a.y == S)))
+    if (on_square(a, b, S))
         return 0;
     check ck = {g, ka, kb, a, b, c, 1};
     const int32_t x0 = a.x < b.x ? a.x : b.x, x1 = a.x > b.x ? a.x : b.x;
@@ -543,7 +552,7 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
         const wm_pt c = cd->c;
         /* nearest edge: a small search first (most corners are already
          * within a quarter pixel), then up to WM_CREASE_REACH */
-        nearest nr = {&g, c.x, c.y, INFINITY, SIZE_MAX};
+        nearest nr = {&g, c.x, c.y, INFINITY, SIZE_MAX, S};
         int32_t R = WM_Q;
         if (visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
                         &nr) < 0)

@@ -16,9 +16,9 @@
  * Rule: the field is 1-Lipschitz and |v| never exceeds the distance to the
  * boundary, so no boundary point lies within |v| of a sample; the balls of
  * the samples around an edge leave a feasible part of it where alone the
- * boundary may meet it (feasible()). An edge of one class with a feasible
- * part "cannot decide" (with |va| + |vb| > 1 pixel it never can). An edge
- * whose samples differ is "loose" when its feasible part reaches more than
+ * boundary may meet it (feasible_near/far). An edge of one class with a
+ * feasible part "cannot decide" (with |va| + |vb| > 1 pixel it never can). An
+ * edge whose samples differ is "loose" when its feasible part reaches more than
  * LOOSE pixel from the interpolated crossing. A saddle cell cannot decide
  * which diagonal the boundary separates. Their crossings are computed
  * exactly from the inputs (probe.h: capsule and lake intervals along the
@@ -42,12 +42,11 @@
  * samples differ that is not loose, and a feature narrower than the
  * lattice's rounding (block.c drops rings thinner than 1.5 units).
  *
- * Seams: an edge's crossings depend on its two samples and the inputs
- * only, with every coordinate difference formed in integers, so both
- * blocks sharing an edge of their square find the same ones; an edge on
- * the square is judged loose from the samples on its line alone, which
- * both blocks hold; subdivision happens inside cells, which belong to one
- * block.
+ * Seams: an edge's crossings depend on the inputs only, with every
+ * coordinate difference formed in integers, so both blocks sharing an edge
+ * of their square find the same ones; every edge on the square whose
+ * samples differ takes its exact crossing in both; subdivision happens
+ * inside cells, which belong to one block.
  *
  * Cost: a few float operations per edge of a mixed tile within a pixel of
  * the boundary; one exact search (the items near the edge) per edge that
@@ -264,20 +263,24 @@ static float clear_of(const float *s, const edge_view *e)
     return sqrtf(h2);
 }
 
-/* [*L, *U]: the part of the edge (pixels from a) that no sample's ball
- * clears, where alone the boundary may meet it. The feet -1 and 0 of the
- * edge's line clear a prefix, 1 and 2 a suffix. lazy: stop once the edge
- * is cleared (L > U). */
-static void feasible(const edge_view *e, int lazy, float *L, float *U)
+/* [*L, *U]: the part of the edge (pixels from a) that the balls of the
+ * samples at its two ends and beside them leave, where alone the boundary
+ * may meet it; feasible_far() narrows it with the feet -1 and 2 of the
+ * edge's line (the feet -1 and 0 clear a prefix, 1 and 2 a suffix). */
+static void feasible_near(const edge_view *e, float *L, float *U)
 {
     *L = clear_of(e->a, e);
     *U = 1.0f - clear_of(e->a + e->along, e);
-    if (e->before && !(lazy && *L > *U))
+}
+
+static void feasible_far(const edge_view *e, float *L, float *U)
+{
+    if (e->before)
     {
         const float l = clear_of(e->a - e->along, e) - 1.0f;
         *L = l > *L ? l : *L;
     }
-    if (e->after && !(lazy && *L > *U))
+    if (e->after)
     {
         const float u = 2.0f - clear_of(e->a + 2 * e->along, e);
         *U = u < *U ? u : *U;
@@ -285,14 +288,17 @@ static void feasible(const edge_view *e, int lazy, float *L, float *U)
 }
 
 /* Whether an edge whose two samples are of one class cannot decide: some
- * part of it is clear of every ball (with a margin of 1/1000 pixel for the
- * float values); with |va| + |vb| > 1 pixel it is always decided. */
+ * part of it is feasible (with a margin of 1/1000 pixel for the float
+ * values); with |va| + |vb| > 1 pixel it never is. */
 static int undecided(const edge_view *e)
 {
     if (fabsf(e->a[0]) + fabsf(e->a[e->along]) > 1.0f)
         return 0;
     float L, U;
-    feasible(e, 1, &L, &U);
+    feasible_near(e, &L, &U);
+    if (L > U + 0.001f)
+        return 0;
+    feasible_far(e, &L, &U);
     return L <= U + 0.001f;
 }
 
@@ -308,7 +314,10 @@ static int loose(const edge_view *e)
         return 0;
     const float p = va / (va + vb); /* interpolated, pixels from a */
     float L, U;
-    feasible(e, 0, &L, &U);
+    feasible_near(e, &L, &U);
+    if (p - L <= LOOSE && U - p <= LOOSE)
+        return 0;
+    feasible_far(e, &L, &U);
     return p - L > LOOSE || U - p > LOOSE;
 }
 
@@ -383,7 +392,7 @@ static int exact_sides(wm_hidden *h, const wm_field *f, wm_probe *probe)
             const int32_t sc = side == 1 ? c + 1 : c;
             const int32_t sr = side == 2 ? r + 1 : r;
             if (vertical ? sc == 0 || sc == n : sr == 0 || sr == n)
-                continue; /* the block square keeps its sampled crossing */
+                continue; /* listed by the screen (every crossing there) */
             const int wa = wm_field_at(f, sc, sr) <= 0;
             const int wb = (vertical ? wm_field_at(f, sc, sr + 1)
                                      : wm_field_at(f, sc + 1, sr)) <= 0;
@@ -426,7 +435,8 @@ static int cmp_seedkey(const void *a, const void *b)
 }
 
 /* Seeds point p (block-local) of a small input, when inside the block. */
-static int add_seed(wm_hidden *h, const wm_field *f, int64_t x, int64_t y)
+static int add_seed(wm_hidden *h, const wm_field *f, int64_t x, int64_t y,
+                    int ambiguous)
 {
     const int32_t n = f->w - 1;
     if (x < 0 || y < 0 || x >= (int64_t)n * WM_Q || y >= (int64_t)n * WM_Q)
@@ -439,7 +449,7 @@ static int add_seed(wm_hidden *h, const wm_field *f, int64_t x, int64_t y)
         return 0;
     h->seed[h->nseed] = (wm_pt){(int32_t)x, (int32_t)y};
     h->seedcell[h->nseed++] = cell_key(f, c, r);
-    return add_cell(h, f, c, r);
+    return !ambiguous || add_cell(h, f, c, r);
 }
 
 /* Seeds the tips of thin segment g's caps that lie on the union's
@@ -468,30 +478,32 @@ static int add_tips(wm_hidden *h, const wm_field *f, wm_probe *probe,
             continue;
         if (wm_probe_distance(probe, (double)x, (double)y, g->r + 2) < -1.0)
             continue;
-        if (!add_seed(h, f, x, y))
+        if (!add_seed(h, f, x, y, 1))
             return 0;
     }
     return 1;
 }
 
-/* Seeds corner p of the union's boundary (probe->corner) when the four
- * samples of its cell are of one class: the corner of an island smaller
- * than a pixel that several rivers enclose, or of a pond between banks,
- * which no side of the cell may cross. A corner buried under a third
- * input is skipped (a floating-point choice: a seed only adds exact
- * work). */
+/* Seeds corner p of the union's boundary (probe->corner), unless buried
+ * under a third input (a floating-point choice: a seed only adds exact
+ * work). When the four samples of its cell are of one class the cell is
+ * ambiguous: the corner of an island smaller than a pixel that several
+ * rivers enclose, or of a pond between banks, which no side of the cell
+ * may cross. Otherwise the seed only steers the subdivision of a cell
+ * ambiguous for other reasons to the corner (a wedge tip the straight
+ * segment of a simple rectangle would cut); crease.c recovers the
+ * corners of the other cells. */
 static int corner_seed(wm_hidden *h, const wm_field *f, wm_probe *probe,
                        wm_pt p)
 {
-    const int32_t c = p.x / WM_Q, r = p.y / WM_Q;
-    const int w = wm_field_at(f, c, r) <= 0;
-    if ((wm_field_at(f, c + 1, r) <= 0) != w ||
-        (wm_field_at(f, c, r + 1) <= 0) != w ||
-        (wm_field_at(f, c + 1, r + 1) <= 0) != w)
-        return 1;
     if (wm_probe_distance(probe, p.x, p.y, 2.0) < -1.0)
         return 1;
-    return add_seed(h, f, p.x, p.y);
+    const int32_t c = p.x / WM_Q, r = p.y / WM_Q;
+    const int w = wm_field_at(f, c, r) <= 0;
+    const int uniform = (wm_field_at(f, c + 1, r) <= 0) == w &&
+                        (wm_field_at(f, c, r + 1) <= 0) == w &&
+                        (wm_field_at(f, c + 1, r + 1) <= 0) == w;
+    return add_seed(h, f, p.x, p.y, uniform);
 }
 
 /* Seeds the cells of the inputs smaller than two pixels: lake rings (the
@@ -520,7 +532,7 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
                 continue;
             if (x1 - x0 < small && y1 - y0 < small &&
                 !add_seed(h, f, s->edges[e0].ax - probe->X0,
-                          s->edges[e0].ay - probe->Y0))
+                          s->edges[e0].ay - probe->Y0, 1))
                 return 0;
             e0 = e + 1;
             x0 = y0 = INT64_MAX;
@@ -533,7 +545,7 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
         const int64_t dx = g->bx > g->ax ? g->bx - g->ax : g->ax - g->bx;
         const int64_t dy = g->by > g->ay ? g->by - g->ay : g->ay - g->by;
         if ((double)(dx > dy ? dx : dy) + 2 * g->r < (double)small &&
-            !add_seed(h, f, g->ax - probe->X0, g->ay - probe->Y0))
+            !add_seed(h, f, g->ax - probe->X0, g->ay - probe->Y0, 1))
             return 0;
         if (g->r < THIN_CAP && !add_tips(h, f, probe, g))
             return 0;
@@ -623,31 +635,32 @@ typedef struct
     int32_t c0, r0, c1, r1, n;
 } tile;
 
-/* Edge from sample (c0 + q, r) of T along x or y. On the block square
- * (square != 0) it sees no row beside its line, which differ between the
- * two blocks sharing it. */
-static edge_view view_of(const tile *T, int32_t q, int32_t r, int vertical,
-                         int square)
+/* Edge from sample (c0 + q, r) of T along x or y. */
+static edge_view view_of(const tile *T, int32_t q, int32_t r, int vertical)
 {
     const ptrdiff_t W = WM_TILE + 1;
     const int32_t cw = T->c1 - T->c0;
-    edge_view e = {T->v + (ptrdiff_t)(r - T->r0) * W + q,
-                   1,
-                   W,
-                   q > 0,
-                   q + 2 <= cw,
-                   r - T->r0,
-                   T->r1 - r};
     if (vertical)
-        e = (edge_view){e.a, W, 1, r > T->r0, r + 2 <= T->r1, q, cw - q};
-    if (square)
-        e.lo = e.hi = 0;
-    return e;
+        return (edge_view){T->v + (ptrdiff_t)(r - T->r0) * W + q,
+                           W,
+                           1,
+                           r > T->r0,
+                           r + 2 <= T->r1,
+                           q,
+                           cw - q};
+    return (edge_view){T->v + (ptrdiff_t)(r - T->r0) * W + q,
+                       1,
+                       W,
+                       q > 0,
+                       q + 2 <= cw,
+                       r - T->r0,
+                       T->r1 - r};
 }
 
 /* Screens the edges of row r of T at the columns set in m: along x or y,
  * whose samples are of one class (kind 0: searched when they cannot
- * decide) or differ (kind 1: searched when loose). */
+ * decide) or differ (kind 1: searched when loose, and always on the block
+ * square, so that the two blocks sharing it take the same crossing). */
 static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe,
                   const tile *T, int32_t r, uint64_t m, int vertical, int kind)
 {
@@ -656,17 +669,16 @@ static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe,
         const int32_t q = __builtin_ctzll(m);
         m &= m - 1;
         const int32_t c = T->c0 + q;
+        const edge_view e = view_of(T, q, r, vertical);
         if (kind == 0)
         {
-            const edge_view e = view_of(T, q, r, vertical, 0);
             if (undecided(&e) &&
                 !search_edge(h, f, probe, c, r, vertical, e.a[0] <= 0))
                 return 0;
             continue;
         }
         const int sq = vertical ? c == 0 || c == T->n : r == 0 || r == T->n;
-        const edge_view e = view_of(T, q, r, vertical, sq);
-        if (loose(&e) && !loose_edge(h, f, probe, c, r, vertical))
+        if ((sq || loose(&e)) && !loose_edge(h, f, probe, c, r, vertical))
             return 0;
     }
     return 1;

@@ -58,11 +58,14 @@ extern "C"
      * every edge of a mixed tile whose two samples are of one class and
      * whose feasible part (what the samples' balls leave) is not empty, and
      * every edge whose samples differ and whose interpolated crossing may
-     * stray more than LOOSE pixel, gets the exact crossings of the union's
-     * boundary with it (wm_probe_crossings) and is listed. The cells of an
+     * stray more than LOOSE pixel or that lies on the block square, gets
+     * the exact crossings of the union's boundary with it
+     * (wm_probe_crossings) and is listed. The cells of an
      * edge of one class with crossings, of a loose edge with three or more,
      * saddle cells, and the cells of seeds (small inputs, thin caps'
-     * tips, corners in cells of one class) are ambiguous. Then every side
+     * tips, corners in cells of one class) are ambiguous; a corner in
+     * another cell only steers that cell's subdivision, if it is
+     * ambiguous. Then every side
      * of an ambiguous cell whose samples differ in class, but those on the
      * block square, gets its crossings exactly too (listed, even when it has
      * one); three or more make the cell across ambiguous as well, and so on.
