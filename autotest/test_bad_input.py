@@ -160,6 +160,54 @@ def test_descriptor_missing_datasource(wm, tmp_dir):
     assert_refused(wm, {}, path=desc, all_of=['missing_relative_rivers.gpkg'])
 
 
+FILTER_FORMATS = {'GPKG': 'gpkg', 'FlatGeobuf': 'fgb', 'ESRI Shapefile': 'shp', 'GeoJSON': 'geojson'}
+
+
+@pytest.mark.parametrize('fmt', sorted(FILTER_FORMATS))
+@pytest.mark.parametrize('role', ['RIVERS', 'LAKES'])
+def test_invalid_where_refused(wm, simple_scene, tmp_dir, fmt, role):
+    """An attribute filter the input's driver cannot apply is an error on
+    every format (GeoPackage accepts any filter and fails on the first
+    read), naming the option, the filter and the layer."""
+    layer = role.lower()
+    path = os.path.join(tmp_dir, '%s.%s' % (layer, FILTER_FORMATS[fmt]))
+    gdal.VectorTranslate(path, simple_scene, format=fmt, layers=[layer],
+                         layerName=layer)
+    o = {role: path, role + '_LAYER': layer, 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512,
+         role + '_WHERE': 'nosuchfield = 1'}
+    assert_refused(wm, o, all_of=[role + '_WHERE', 'nosuchfield', layer])
+
+
+def test_valid_where_still_applies(wm, simple_scene, tmp_dir):
+    """The first read that checks a filter leaves the layer's reading
+    where it starts: every feature the filter selects is meshed."""
+    o = {'RIVERS': simple_scene, 'RIVERS_LAYER': 'rivers', 'PIXEL_SIZE': 1,
+         'BLOCK_SIZE': 512, 'RIVERS_WHERE': "name = 'A'"}
+    got = oracle.total_area(wm.run(o).water)
+    assert abs(got - oracle.water_area(o)) <= 0.005 * got
+
+
+def test_num_threads_limit_named(wm, simple_options):
+    assert_refused(wm, dict(simple_options, NUM_THREADS='100000'),
+                   all_of=['NUM_THREADS', '1024'])
+
+
+def test_geographic_crs_with_projected_coordinates(wm, tmp_dir):
+    """GeoPackage's "undefined geographic" CRS (srs_id 0) on projected
+    coordinates: refused, saying the coordinates are out of range and what
+    to do, not a PROJ error."""
+    path = os.path.join(tmp_dir, 'srs0.gpkg')
+    scenes.write_layer(path, 'rivers', ogr.wkbLineString, None,
+                       [{'geom': 'LINESTRING (389000 4710000, 389100 4710050)'}])
+    ds = ogr.Open(path, 1)
+    ds.ExecuteSQL('UPDATE gpkg_geometry_columns SET srs_id = 0')
+    ds.ExecuteSQL('UPDATE gpkg_contents SET srs_id = 0')
+    ds = None
+    assert ogr.Open(path).GetLayer(0).GetSpatialRef().IsGeographic()
+    assert_refused(wm, {'RIVERS': path, 'RIVERS_LAYER': 'rivers'},
+                   all_of=['rivers', 'out of range', 'TARGET_SRS'])
+
+
 # the same refusals through the CLI: non-zero exit, ERROR on stderr, no dst
 def _cli_case(case, tmp_dir, simple_scene):
     if case == 'missing_datasource':
@@ -181,11 +229,15 @@ def _cli_case(case, tmp_dir, simple_scene):
     if case == 'heuristic':
         return ['-rivers', simple_scene, '-rivers_layer', 'rivers', '-method', 'PAPER',
                 '-heuristic', 'RANDOM'], 'HEURISTIC'
+    if case == 'bad_where':  # GeoPackage reports it only on the first read
+        return ['-rivers', simple_scene, '-rivers_layer', 'rivers',
+                '-rivers_where', 'nosuchfield = 1'], 'nosuchfield'
     raise ValueError(case)
 
 
 @pytest.mark.parametrize('case', ['missing_datasource', 'missing_layer', 'pixel_size', 'block_size',
-                                  'polygons_as_rivers', 'nan', 'neither', 'heuristic'])
+                                  'polygons_as_rivers', 'nan', 'neither', 'heuristic',
+                                  'bad_where'])
 def test_cli_refuses(wm, tmp_dir, simple_scene, case):
     args, token = _cli_case(case, tmp_dir, simple_scene)
     out_dir = os.path.join(tmp_dir, 'out')

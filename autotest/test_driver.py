@@ -461,6 +461,49 @@ def test_geographic_input_gets_utm(wm, tmp_dir, lon, lat, epsg):
     assert_area_close(wm, res, o)
 
 
+@pytest.mark.parametrize('lat,epsg', [(89.9, 32661), (-85.9, 32761)])
+def test_polar_input_gets_ups(wm, tmp_dir, lat, epsg):
+    """North of 84 N and south of 80 S UTM is not defined: UPS, and the
+    water where the river is."""
+    path = os.path.join(tmp_dir, 'polar.gpkg')
+    rivers = [{'geom': 'LINESTRING (10 %.4f, 10 %.4f)' % (lat, lat + 0.001),
+               'width': 10.0, 'name': 'p'}]
+    scenes.write_layer(path, 'rivers', ogr.wkbLineString, 4326, rivers,
+                       fields=[('width', 'Real'), ('name', 'String')])
+    o = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'WIDTH_FIELD': 'width',
+         'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512}
+    res = wm.run(o)
+    assert srs_is(res.srs, epsg), res.srs.ExportToWkt() if res.srs else None
+    ct = osr.CoordinateTransformation(scenes.srs_from(4326), scenes.srs_from(epsg))
+    x, y, _ = ct.TransformPoint(10.0, lat + 0.0005)
+    from shapely.geometry import Point
+    assert any(f.geom.contains(Point(x, y)) for f in res.water), (x, y)
+    # 111 m of river 10 m wide
+    assert 1000 < oracle.total_area(res.water) < 1300
+
+
+def test_geographic_input_across_the_antimeridian(wm, tmp_dir):
+    """A river from 179.999 E to 179.999 W at 10 N: the UTM zone of its
+    own longitude (60 N), not of the extent's centre (0, zone 31), and the
+    water where the river is."""
+    path = os.path.join(tmp_dir, 'anti.gpkg')
+    rivers = [{'geom': 'LINESTRING (179.999 10, 180 10.0005)', 'width': 10.0, 'name': 'e'},
+              {'geom': 'LINESTRING (-180 10.0005, -179.999 10.001)', 'width': 10.0, 'name': 'w'}]
+    scenes.write_layer(path, 'rivers', ogr.wkbLineString, 4326, rivers,
+                       fields=[('width', 'Real'), ('name', 'String')])
+    o = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'WIDTH_FIELD': 'width',
+         'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512}
+    res = wm.run(o)
+    assert srs_is(res.srs, 32660), res.srs.ExportToWkt() if res.srs else None
+    ct = osr.CoordinateTransformation(scenes.srs_from(4326), scenes.srs_from(32660))
+    from shapely.geometry import Point
+    for lon, lat in ((179.9995, 10.00025), (-179.9995, 10.00075)):
+        x, y, _ = ct.TransformPoint(lon, lat)
+        assert any(f.geom.distance(Point(x, y)) < 1.0 for f in res.water), (lon, lat, x, y)
+    # about 220 m of river 10 m wide
+    assert 1500 < oracle.total_area(res.water) < 3000
+
+
 def test_negative_block_indices(wm, tmp_dir):
     path = scenes.make_negative_scene(os.path.join(tmp_dir, 'neg.gpkg'))
     o = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'LAKES': path, 'LAKES_LAYER': 'lakes',

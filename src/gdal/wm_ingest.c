@@ -42,6 +42,142 @@ static OGRSpatialReferenceH clone_trad(OGRSpatialReferenceH s)
     return c;
 }
 
+/* Adds to sums[] (sin, cos of the longitude, latitude, count) the centre
+ * of extent e of a layer whose CRS `ls` is geographic, in WGS 84
+ * degrees. FALSE after CPLError when the extent is out of range for a
+ * geographic CRS (projected coordinates in a layer said to be geographic,
+ * such as GeoPackage's "undefined geographic" srs_id 0). */
+static int add_centre(OGRLayerH h, OGRSpatialReferenceH ls,
+                      const OGREnvelope *e, double *sums)
+{
+    if (e->MinX < -360 || e->MaxX > 360 || e->MinY < -90.000001 ||
+        e->MaxY > 90.000001)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: layer '%s' has a geographic CRS but coordinates "
+                 "out of range for one (x %.6g .. %.6g, y %.6g .. %.6g); "
+                 "assign the layer its right CRS or set TARGET_SRS.",
+                 OGR_L_GetName(h), e->MinX, e->MaxX, e->MinY, e->MaxY);
+        return FALSE;
+    }
+    OGRSpatialReferenceH ll = OSRNewSpatialReference(NULL);
+    OSRSetWellKnownGeogCS(ll, "WGS84");
+    OSRSetAxisMappingStrategy(ll, OAMS_TRADITIONAL_GIS_ORDER);
+    OGRCoordinateTransformationH ct = OCTNewCoordinateTransformation(ls, ll);
+    /* longitudes as the circular mean of the features' centres when the
+     * extent spans more than half the globe (data across the
+     * antimeridian: the extent's centre is on the far side of the Earth) */
+    double sn = 0, cs = 0, sy = 0;
+    long n = 0;
+    if (e->MaxX - e->MinX > 180)
+    {
+        OGR_L_ResetReading(h);
+        OGRFeatureH f;
+        while ((f = OGR_L_GetNextFeature(h)) != NULL)
+        {
+            OGRGeometryH g = OGR_F_GetGeometryRef(f);
+            if (g && !OGR_G_IsEmpty(g))
+            {
+                OGREnvelope fe;
+                OGR_G_GetEnvelope(g, &fe);
+                double x = (fe.MinX + fe.MaxX) / 2, y = (fe.MinY + fe.MaxY) / 2;
+                if (ct && OCTTransform(ct, 1, &x, &y, NULL))
+                {
+                    sn += sin(x * M_PI / 180);
+                    cs += cos(x * M_PI / 180);
+                    sy += y;
+                    n++;
+                }
+            }
+            OGR_F_Destroy(f);
+        }
+        OGR_L_ResetReading(h);
+    }
+    else
+    {
+        double x = (e->MinX + e->MaxX) / 2, y = (e->MinY + e->MaxY) / 2;
+        if (ct && OCTTransform(ct, 1, &x, &y, NULL))
+        {
+            sn = sin(x * M_PI / 180);
+            cs = cos(x * M_PI / 180);
+            sy = y;
+            n = 1;
+        }
+    }
+    if (ct)
+        OCTDestroyCoordinateTransformation(ct);
+    OSRRelease(ll);
+    if (n > 0)
+    {
+        sums[0] += sn / (double)n;
+        sums[1] += cs / (double)n;
+        sums[2] += sy / (double)n;
+        sums[3] += 1;
+    }
+    return TRUE;
+}
+
+/* The centre (WGS 84 degrees) of the inputs, all geographic: per layer the
+ * centre of its extent (of its features across the antimeridian), then
+ * the circular mean of the layers' longitudes. FALSE after CPLError. */
+static int geographic_centre(OGRLayerH hRivers, OGRLayerH hLakes, double *lon,
+                             double *lat)
+{
+    double sums[4] = {0, 0, 0, 0};
+    OGRLayerH hl[2] = {hRivers, hLakes};
+    for (int i = 0; i < 2; i++)
+    {
+        OGREnvelope e;
+        if (!hl[i] || OGR_L_GetExtent(hl[i], &e, TRUE) != OGRERR_NONE)
+            continue;
+        OGRSpatialReferenceH ls = clone_trad(layer_srs(hl[i]));
+        const int ok = add_centre(hl[i], ls, &e, sums);
+        OSRRelease(ls);
+        if (!ok)
+            return FALSE;
+    }
+    if (sums[3] == 0)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: the inputs are geographic and their extent "
+                 "could not be read; set TARGET_SRS.");
+        return FALSE;
+    }
+    *lon = atan2(sums[0], sums[1]) * 180 / M_PI;
+    *lat = sums[2] / sums[3];
+    return TRUE;
+}
+
+/* The projected CRS for geographic inputs centred at (lon, lat): the UTM
+ * zone of the centre, or UPS north of 84 N and south of 80 S (where UTM
+ * is not defined), with a warning naming it. */
+static OGRSpatialReferenceH auto_projected(double lon, double lat)
+{
+    int epsg;
+    char name[64];
+    if (lat > 84 || lat < -80)
+    {
+        epsg = lat > 0 ? 32661 : 32761;
+        snprintf(name, sizeof name, "UPS %s", lat > 0 ? "North" : "South");
+    }
+    else
+    {
+        int zone = (int)floor((lon + 180.0) / 6.0) + 1;
+        zone = zone < 1 ? 1 : zone > 60 ? 60 : zone;
+        epsg = (lat >= 0 ? 32600 : 32700) + zone;
+        snprintf(name, sizeof name, "UTM zone %d%c", zone,
+                 lat >= 0 ? 'N' : 'S');
+    }
+    OGRSpatialReferenceH u = OSRNewSpatialReference(NULL);
+    OSRImportFromEPSG(u, epsg);
+    OSRSetAxisMappingStrategy(u, OAMS_TRADITIONAL_GIS_ORDER);
+    CPLError(CE_Warning, CPLE_AppDefined,
+             "WATERMESH: the inputs are geographic; computing in %s "
+             "(EPSG:%d). Set TARGET_SRS to choose another CRS.",
+             name, epsg);
+    return u;
+}
+
 static OGRSpatialReferenceH working_srs(OGRLayerH hRivers, OGRLayerH hLakes,
                                         CSLConstList opts);
 
@@ -103,56 +239,12 @@ static OGRSpatialReferenceH working_srs(OGRLayerH hRivers, OGRLayerH hLakes,
         return clone_trad(r);
     if (l && OSRIsProjected(l))
         return clone_trad(l);
-    /* geographic: UTM zone of the centre of the inputs' extents */
-    double sx = 0, sy = 0;
-    int n = 0;
-    OGRLayerH hl[2] = {hRivers, hLakes};
-    for (int i = 0; i < 2; i++)
-    {
-        OGREnvelope e;
-        if (hl[i] && OGR_L_GetExtent(hl[i], &e, TRUE) == OGRERR_NONE)
-        {
-            OGRSpatialReferenceH ls = clone_trad(layer_srs(hl[i]));
-            OGRSpatialReferenceH ll = OSRNewSpatialReference(NULL);
-            OSRSetWellKnownGeogCS(ll, "WGS84");
-            OSRSetAxisMappingStrategy(ll, OAMS_TRADITIONAL_GIS_ORDER);
-            OGRCoordinateTransformationH ct =
-                OCTNewCoordinateTransformation(ls, ll);
-            double x = (e.MinX + e.MaxX) / 2, y = (e.MinY + e.MaxY) / 2;
-            if (ct && OCTTransform(ct, 1, &x, &y, NULL))
-            {
-                sx += x;
-                sy += y;
-                n++;
-            }
-            if (ct)
-                OCTDestroyCoordinateTransformation(ct);
-            OSRRelease(ls);
-            OSRRelease(ll);
-        }
-    }
-    if (n == 0)
-    {
-        CPLError(CE_Failure, CPLE_AppDefined,
-                 "WATERMESH: the inputs are geographic and their extent "
-                 "could not be read; set TARGET_SRS.");
+    /* geographic: the UTM zone (UPS near the poles) of the inputs'
+     * centre */
+    double lon, lat;
+    if (!geographic_centre(hRivers, hLakes, &lon, &lat))
         return NULL;
-    }
-    const double lon = sx / n, lat = sy / n;
-    int zone = (int)floor((lon + 180.0) / 6.0) + 1;
-    if (zone < 1)
-        zone = 1;
-    if (zone > 60)
-        zone = 60;
-    const int epsg = (lat >= 0 ? 32600 : 32700) + zone;
-    OGRSpatialReferenceH u = OSRNewSpatialReference(NULL);
-    OSRImportFromEPSG(u, epsg);
-    OSRSetAxisMappingStrategy(u, OAMS_TRADITIONAL_GIS_ORDER);
-    CPLError(CE_Warning, CPLE_AppDefined,
-             "WATERMESH: the inputs are geographic; computing in UTM zone "
-             "%d%c (EPSG:%d). Set TARGET_SRS to choose another CRS.",
-             zone, lat >= 0 ? 'N' : 'S', epsg);
-    return u;
+    return auto_projected(lon, lat);
 }
 
 /* The transformation from layer h's CRS to the working CRS dst, or NULL

@@ -184,8 +184,8 @@ static int params_parse(CSLConstList opts, WMParams *p)
         if (end == t || *end || v < 1 || v > 1024)
         {
             CPLError(CE_Failure, CPLE_IllegalArg,
-                     "WATERMESH: NUM_THREADS=%s: expected a positive "
-                     "integer or ALL_CPUS.",
+                     "WATERMESH: NUM_THREADS=%s: expected an integer from 1 "
+                     "to 1024, or ALL_CPUS.",
                      t);
             return FALSE;
         }
@@ -230,6 +230,32 @@ void WMParamsFree(WMParams *p)
     p->width_field = p->target_srs = NULL;
 }
 
+/* NULL when attribute filter `where` applies to layer h, else the
+ * driver's reason (CPLFree it; maybe empty). Some drivers accept any
+ * filter and report an error only on the first read (GeoPackage's "failed
+ * to prepare SQL"), or through CPLGetLastErrorType alone: the filter is
+ * set, one feature is read, and any error on the way counts. */
+static char *filter_error(OGRLayerH h, const char *where)
+{
+    CPLErrorReset();
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    int ok = OGR_L_SetAttributeFilter(h, where) == OGRERR_NONE &&
+             CPLGetLastErrorType() < CE_Failure;
+    if (ok)
+    {
+        OGR_L_ResetReading(h);
+        OGRFeatureH f = OGR_L_GetNextFeature(h);
+        if (f)
+            OGR_F_Destroy(f);
+        ok = CPLGetLastErrorType() < CE_Failure;
+        OGR_L_ResetReading(h);
+    }
+    char *why = ok ? NULL : CPLStrdup(CPLGetLastErrorMsg());
+    CPLPopErrorHandler();
+    CPLErrorReset();
+    return why;
+}
+
 /* Opens one role's datasource and layer, sets its attribute filter. */
 static int open_role(CSLConstList opts, const char *role, GDALDatasetH *phDS,
                      OGRLayerH *phLayer)
@@ -269,13 +295,15 @@ static int open_role(CSLConstList opts, const char *role, GDALDatasetH *phDS,
     }
     snprintf(key, sizeof key, "%s_WHERE", role);
     const char *where = CSLFetchNameValue(opts, key);
-    if (where && *where &&
-        OGR_L_SetAttributeFilter(*phLayer, where) != OGRERR_NONE)
+    char *why = where && *where ? filter_error(*phLayer, where) : NULL;
+    if (why)
     {
         CPLError(CE_Failure, CPLE_IllegalArg,
                  "WATERMESH: %s=%s is not a valid filter on layer '%s' of "
-                 "'%s'.",
-                 key, where, OGR_L_GetName(*phLayer), path);
+                 "'%s'%s%s",
+                 key, where, OGR_L_GetName(*phLayer), path, *why ? ": " : ".",
+                 why);
+        CPLFree(why);
         GDALClose(*phDS);
         *phDS = NULL;
         *phLayer = NULL;
