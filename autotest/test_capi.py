@@ -1,14 +1,17 @@
 """The public C API (watermesh.h) through tests/capi_demo, and interrupting
 the CLI: a cancelled run reports CPLE_UserInterrupt and writes nothing."""
 
+import math
 import os
 import signal
 import subprocess
 import time
 
 import pytest
+from osgeo import ogr
 
 import conftest
+import scenes
 
 DEMO = os.path.join(conftest.BUILD_DIR, 'tests', 'capi_demo')
 ANDORRA = os.path.join(conftest.DATA_DIR, 'osm_andorra_2023.gpkg')
@@ -79,3 +82,44 @@ def test_cli_interrupted_leaves_nothing(wm, tmp_dir):
     assert 'interrupted' in err or 'User terminated' in err, err
     assert not os.path.exists(dst)
     assert [f for f in os.listdir(tmp_dir) if 'watermesh' in f and f.endswith('.tmp')] == []
+
+
+def _dense_river(path):
+    """One river 200 m long of 200,000 vertices 1 mm apart with a 1 cm
+    wiggle, 3 m wide (issue 13): minutes of work inside one block."""
+    n = 200000
+    wkt = 'LINESTRING (%s)' % ','.join(
+        '%.4f %.4f' % (400000 + i * 0.001, 4700000 + 0.01 * math.sin(i * 0.7)) for i in range(n))
+    scenes.write_layer(path, 'rivers', ogr.wkbLineString, 32631, [{'geom': wkt, 'width': 3.0}],
+                       fields=[('width', 'Real')])
+    return path
+
+
+@pytest.mark.parametrize('sig', [signal.SIGTERM, signal.SIGINT])
+def test_cli_signal_acted_on_within_a_second(tmp_dir, sig):
+    """A signal in the middle of a block that takes minutes: the run stops
+    within a second (the core's loops check the runner's stop flag, which
+    the progress callback sets from the signal), exits non-zero, and leaves
+    nothing at the destination or beside it."""
+    src = _dense_river(os.path.join(tmp_dir, 'dense.gpkg'))
+    out_dir = os.path.join(tmp_dir, 'out')
+    os.mkdir(out_dir)
+    dst = os.path.join(out_dir, 'dense_out.gpkg')
+    proc = subprocess.Popen([conftest.CLI_PATH, '-rivers', src, '-width_field', 'width', '-q', dst],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True)
+    time.sleep(3.0)
+    if proc.poll() is not None:
+        pytest.fail('run finished before the signal (%d): %s' % (proc.returncode, proc.stderr.read()))
+    t = time.time()
+    proc.send_signal(sig)
+    try:
+        _, err = proc.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.communicate()
+        pytest.fail('still running 30 s after the signal')
+    waited = time.time() - t
+    assert waited <= 1.0, 'stopped %.2f s after the signal' % waited
+    assert proc.returncode != 0, err
+    assert 'interrupted' in err, err
+    assert os.listdir(out_dir) == [], os.listdir(out_dir)

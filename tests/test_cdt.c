@@ -235,7 +235,7 @@ static verdict verify(const wm_rings *r, const uint32_t *tris, size_t nt)
  * returns the seconds spent in wm_cdt_triangulate. */
 static double check(const char *name, const wm_rings *r)
 {
-    const wm_ctx ctx = {on_error, NULL};
+    const wm_ctx ctx = {on_error, NULL, NULL};
     uint32_t *tris = NULL;
     size_t nt = 0;
     const size_t n = r->npts;
@@ -537,7 +537,7 @@ static void random_batch(int cases)
 
 static void expect_invalid(const char *name, const wm_rings *r)
 {
-    const wm_ctx ctx = {on_error, NULL};
+    const wm_ctx ctx = {on_error, NULL, NULL};
     uint32_t *tris = (uint32_t *)&nerrors; /* must be reset to NULL */
     size_t nt = 7;
     const int before = nerrors;

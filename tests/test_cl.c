@@ -28,7 +28,7 @@ static void keep(void *user, wm_status st, const char *msg)
     snprintf(last_msg, sizeof last_msg, "%s", msg);
 }
 
-static const wm_ctx ctx = {keep, NULL};
+static const wm_ctx ctx = {keep, NULL, NULL};
 
 /* Field of a window on both paths; returns max |delta| in px and counts
  * samples whose sign differs while |C value| >= 1e-4 px. */

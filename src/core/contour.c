@@ -451,8 +451,15 @@ wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
 
     size_t hc[2] = {0, 0}; /* ambiguous and linked cells of the tiles so far */
     for (size_t t = 0; t < (size_t)f->ntx * (size_t)f->nty; t++)
+    {
+        if (wm_cancelled(ctx))
+        {
+            st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+            goto cleanup;
+        }
         if (f->kind[t] == WM_TILE_MIXED && !tile_segments(&s, f, t, hc))
             goto nomem;
+    }
     const size_t ntileseg = s.nsegs;
     if (s.hid.ncell &&
         (st = wm_hidden_cells(f, probe, &s.hid, push_ambiguous, &s)) != WM_OK)

@@ -260,6 +260,12 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
             const size_t a = pg.start[cell], z = pg.start[cell + 1];
             const int64_t cx = pg.col[cell] + cmin, cy = row + cmin;
             for (size_t i = a; i < z; i++)
+            {
+                if (wm_cancelled(ctx))
+                {
+                    st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+                    goto cleanup;
+                }
                 for (size_t j = i + 1; j < z; j++)
                 {
                     const prim *p = &pr[pg.item[i]], *q = &pr[pg.item[j]];
@@ -292,6 +298,7 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
                             goto nomem;
                     }
                 }
+            }
         }
     /* the field is 1-Lipschitz: a point of the boundary is within 0.71 px
      * of a sample valued within 0.71 px of 0; anything else is buried under

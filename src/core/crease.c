@@ -721,6 +721,12 @@ wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
     size_t nhot = 0;
     for (int pass = 0; pass < 4; pass++)
     {
+        if (wm_cancelled(ctx))
+        {
+            free(hot);
+            st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+            goto cleanup;
+        }
         size_t n = 0, nnext = 0;
         uint64_t *next = NULL;
         st = insert_pass(in, rings, cs, ncand, pass ? hot : NULL, nhot, &next,

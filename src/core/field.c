@@ -989,6 +989,11 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
     {
         const size_t n = ncand - c0 < batch ? ncand - c0 : batch;
         wm_field_batch b;
+        if (wm_cancelled(ctx))
+        {
+            st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+            goto failed;
+        }
         if (n > room)
         {
             const size_t cap = SLAB_TILES > batch ? SLAB_TILES : batch;

@@ -747,6 +747,11 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
                             c0 + WM_TILE < n ? c0 + WM_TILE : n,
                             r0 + WM_TILE < n ? r0 + WM_TILE : n,
                             n};
+            if (wm_cancelled(ctx))
+            {
+                wm_hidden_free(h);
+                return wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+            }
             if (!screen_tile(h, f, probe, &T))
                 goto nomem;
         }

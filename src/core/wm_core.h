@@ -40,7 +40,18 @@ extern "C"
     {
         wm_error_fn error; /**< may be NULL */
         void *user;        /**< passed back to error() */
+        /** set (non-zero, by another thread) to stop: the long loops check
+         *  it every few milliseconds of work and return WM_ERR_CANCELLED;
+         *  NULL: never */
+        const int *cancel;
     } wm_ctx;
+
+    /** Whether ctx asks to stop (wm_ctx.cancel). */
+    static inline int wm_cancelled(const wm_ctx *ctx)
+    {
+        return ctx && ctx->cancel &&
+               __atomic_load_n(ctx->cancel, __ATOMIC_RELAXED);
+    }
 
     /** Reports a formatted message through ctx (may be NULL) and returns
      * status, so callers can write `return wm_fail(ctx, WM_ERR_NOMEM, "...")`.

@@ -64,7 +64,7 @@ static wm_status probe(const char *name, char *desc, size_t desc_size, int *gpu,
         CPLFree(g_probe.err);
         g_probe.name = CPLStrdup(name);
         g_probe.err = NULL;
-        wm_ctx ctx = {WMKeepFirstError, &g_probe.err};
+        wm_ctx ctx = {WMKeepFirstError, &g_probe.err, NULL};
         g_probe.st = wm_cl_probe(name, g_probe.desc, sizeof g_probe.desc,
                                  &g_probe.gpu, &ctx);
     }
@@ -93,7 +93,7 @@ static wm_cl *device_open(const char *name, const char *kernel_dir, char **err)
         c = CPLCalloc(1, sizeof *c);
         c->name = CPLStrdup(name);
         c->kernel_dir = CPLStrdup(kernel_dir);
-        wm_ctx ctx = {WMKeepFirstError, &c->err};
+        wm_ctx ctx = {WMKeepFirstError, &c->err, NULL};
         wm_cl_open(name, kernel_dir, &c->cl, &ctx);
         c->next = g_devices;
         g_devices = c;
@@ -133,7 +133,7 @@ static wm_status eval_device(void *user, const wm_field_batch *b,
     if (!__atomic_load_n(&d->failed, __ATOMIC_ACQUIRE))
     {
         char *msg = NULL;
-        wm_ctx own = {WMKeepFirstError, &msg};
+        wm_ctx own = {WMKeepFirstError, &msg, NULL};
         const wm_status st = wm_cl_eval(d->cl, b, &own);
         if (st == WM_OK || st != WM_ERR_DEVICE || !d->auto_mode)
         {

@@ -497,7 +497,7 @@ CPLErr WaterMeshBand::IReadBlock(int nBlockXOff, int nBlockYOff, void *pImage)
         out[i] = band;
     wm_field f;
     char *msg = nullptr;
-    wm_ctx ctx = {WMKeepFirstError, &msg};
+    wm_ctx ctx = {WMKeepFirstError, &msg, NULL};
     if (wm_field_compute(&c, gx0, gytop - hc + 1, wc, hc,
                          WMDeviceField(ds->m_poScene->device), &f,
                          &ctx) != WM_OK)

@@ -679,7 +679,7 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
     s->core.n = s->params.n;
     s->core.band = 2;
     {
-        wm_ctx ctx = {NULL, NULL};
+        wm_ctx ctx = {NULL, NULL, NULL};
         if (wm_scene_index(&s->core, &ctx) != WM_OK)
         {
             CPLError(CE_Failure, CPLE_AppDefined,

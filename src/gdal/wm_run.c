@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 typedef struct
 {
@@ -69,7 +70,7 @@ static void *feeder(void *arg)
 
         wm_field f;
         char *msg = NULL;
-        wm_ctx ctx = {WMKeepFirstError, &msg};
+        wm_ctx ctx = {WMKeepFirstError, &msg, &r->stop};
         const double t0 = wm_now();
         const wm_status st =
             wm_block_field(&r->s->core, r->blocks[2 * i], r->blocks[2 * i + 1],
@@ -118,7 +119,7 @@ static void *worker(void *arg)
 
         wm_block_result res;
         memset(&res, 0, sizeof res);
-        wm_ctx ctx = {WMKeepFirstError, &msg};
+        wm_ctx ctx = {WMKeepFirstError, &msg, &r->stop};
         const int64_t bx = r->blocks[2 * i], by = r->blocks[2 * i + 1];
         wm_status st = WM_ERR_DEVICE;
         if (!r->pipelined)
@@ -136,6 +137,43 @@ static void *worker(void *arg)
     }
     pthread_mutex_unlock(&r->mu);
     return NULL;
+}
+
+/* Waits (r->mu held) until slot k is ready, asking pfn every 100 ms
+ * (with the fraction done) whether to go on; FALSE when it says stop:
+ * then the workers stop too, within a few milliseconds of work (the core's
+ * loops check r->stop through their wm_ctx). */
+static int wait_ready(runner *r, size_t k, GDALProgressFunc pfn, void *pArg,
+                      double done)
+{
+    while (!r->ready[k])
+    {
+        if (!pfn)
+        {
+            pthread_cond_wait(&r->cv, &r->mu);
+            continue;
+        }
+        struct timespec ts;
+        clock_gettime(CLOCK_REALTIME, &ts);
+        ts.tv_nsec += 100 * 1000 * 1000;
+        if (ts.tv_nsec >= 1000 * 1000 * 1000)
+        {
+            ts.tv_sec++;
+            ts.tv_nsec -= 1000 * 1000 * 1000;
+        }
+        if (pthread_cond_timedwait(&r->cv, &r->mu, &ts) == 0 || r->ready[k])
+            continue;
+        pthread_mutex_unlock(&r->mu);
+        const int go_on = pfn(done, "", pArg);
+        pthread_mutex_lock(&r->mu);
+        if (!go_on)
+        {
+            __atomic_store_n(&r->stop, 1, __ATOMIC_RELAXED);
+            pthread_cond_broadcast(&r->cv);
+            return FALSE;
+        }
+    }
+    return TRUE;
 }
 
 CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
@@ -195,8 +233,13 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     {
         const size_t k = i % r.window;
         pthread_mutex_lock(&r.mu);
-        while (!r.ready[k])
-            pthread_cond_wait(&r.cv, &r.mu);
+        if (!wait_ready(&r, k, pfn, pArg, (double)i / (double)nblocks))
+        {
+            pthread_mutex_unlock(&r.mu);
+            CPLError(CE_Failure, CPLE_UserInterrupt, "User terminated");
+            err = CE_Failure;
+            break;
+        }
         wm_block_result res = r.slot[k];
         const int ok = r.ready[k] > 0;
         char *msg = r.msg[k];
@@ -238,7 +281,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
         }
     }
     pthread_mutex_lock(&r.mu);
-    r.stop = 1;
+    __atomic_store_n(&r.stop, 1, __ATOMIC_RELAXED);
     pthread_cond_broadcast(&r.cv);
     pthread_mutex_unlock(&r.mu);
     for (int t = 0; t < started; t++)
