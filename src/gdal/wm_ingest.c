@@ -361,6 +361,117 @@ static int read_points(builder *b, OGRGeometryH g, const feat_ctx *fc)
     return TRUE;
 }
 
+/* River vertices closer than DENSE_GAP lattice units (a quarter pixel) to
+ * the previous one form a dense run; within a run Douglas-Peucker keeps
+ * the vertices farther than DENSE_TOL (1/16 pixel) from the kept line. A
+ * line denser than the samples (GPS traces, lines traced from rasters or
+ * LiDAR, densified exports) otherwise costs the field, the sub-pixel search
+ * and the corner search per vertex; the union of the capsules moves by at
+ * most DENSE_TOL, and a line whose vertices are a quarter pixel apart or
+ * more is read as it is. */
+#define DENSE_GAP (WM_Q / 4)
+#define DENSE_TOL (WM_Q / 16)
+
+/* Squared distance from (px, py) to segment a -> b (doubles). */
+static double seg_d2(double ax, double ay, double bx, double by, double px,
+                     double py)
+{
+    const double dx = bx - ax, dy = by - ay, l2 = dx * dx + dy * dy;
+    double t = l2 > 0 ? ((px - ax) * dx + (py - ay) * dy) / l2 : 0;
+    t = t < 0 ? 0 : t > 1 ? 1 : t;
+    const double ex = ax + t * dx - px, ey = ay + t * dy - py;
+    return ex * ex + ey * ey;
+}
+
+/* Douglas-Peucker on points s .. e of b (s and e kept), marking keep[]
+ * (an explicit stack of index pairs, e - s + 1 of them at most). */
+static void dp_run(const builder *b, size_t s, size_t e, uint8_t *keep,
+                   size_t *stack)
+{
+    size_t top = 0;
+    stack[top++] = s;
+    stack[top++] = e;
+    const double tol2 = (double)DENSE_TOL * DENSE_TOL;
+    while (top)
+    {
+        const size_t j = stack[--top], i = stack[--top];
+        double best = -1;
+        size_t at = i;
+        for (size_t k = i + 1; k < j; k++)
+        {
+            const double d =
+                seg_d2((double)b->px[i], (double)b->py[i], (double)b->px[j],
+                       (double)b->py[j], (double)b->px[k], (double)b->py[k]);
+            if (d > best)
+            {
+                best = d;
+                at = k;
+            }
+        }
+        if (best > tol2)
+        {
+            keep[at] = 1;
+            stack[top++] = i;
+            stack[top++] = at;
+            stack[top++] = at;
+            stack[top++] = j;
+        }
+    }
+}
+
+/* Thins the dense runs of b->px/py (see DENSE_GAP). FALSE when out of
+ * memory. */
+static int thin_dense(builder *b)
+{
+    const size_t n = b->npts;
+    size_t s = 0;
+    uint8_t *keep = NULL;
+    size_t *stack = NULL;
+    for (size_t i = 1; i <= n; i++)
+    {
+        const int dense = i < n && llabs(b->px[i] - b->px[i - 1]) < DENSE_GAP &&
+                          llabs(b->py[i] - b->py[i - 1]) < DENSE_GAP;
+        if (dense)
+            continue;
+        /* a run s .. i - 1 of consecutive close vertices */
+        if (i - 1 > s + 1)
+        {
+            if (!keep)
+            {
+                keep = VSICalloc(n, 1);
+                stack = VSIMalloc2(2 * n, sizeof *stack);
+                if (!keep || !stack)
+                {
+                    VSIFree(keep);
+                    VSIFree(stack);
+                    CPLError(CE_Failure, CPLE_OutOfMemory,
+                             "WATERMESH: out of memory.");
+                    return FALSE;
+                }
+                memset(keep, 1, n);
+            }
+            for (size_t k = s + 1; k < i - 1; k++)
+                keep[k] = 0;
+            dp_run(b, s, i - 1, keep, stack);
+        }
+        s = i;
+    }
+    if (!keep)
+        return TRUE;
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (keep[i])
+        {
+            b->px[m] = b->px[i];
+            b->py[m] = b->py[i];
+            m++;
+        }
+    b->npts = m;
+    VSIFree(keep);
+    VSIFree(stack);
+    return TRUE;
+}
+
 /* Parses a width value: a number, optionally followed by "m" or "ft". */
 static int parse_width(const char *s, double *w)
 {
@@ -482,7 +593,7 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
                 break;
             }
             *nvert += (size_t)OGR_G_GetPointCount(part);
-            if (!read_points(b, part, &fc))
+            if (!read_points(b, part, &fc) || !thin_dense(b))
             {
                 ok = FALSE;
                 break;
