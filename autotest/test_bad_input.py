@@ -178,6 +178,32 @@ def test_invalid_where_refused(wm, simple_scene, tmp_dir, fmt, role):
     assert_refused(wm, o, all_of=[role + '_WHERE', 'nosuchfield', layer])
 
 
+def test_invalid_where_refused_osm_and_vrt(wm, tmp_dir):
+    """The same through the OSM driver (a raw .osm.pbf: its own field
+    check) and a VRT over a GeoPackage (whose error comes on the first
+    read)."""
+    import conftest
+    osm = os.path.join(tmp_dir, 'river.osm')
+    with open(osm, 'w') as f:
+        f.write('<?xml version="1.0"?><osm version="0.6">'
+                '<node id="1" lat="47.1" lon="9.5"/><node id="2" lat="47.101" lon="9.501"/>'
+                '<way id="3"><nd ref="1"/><nd ref="2"/><tag k="waterway" v="river"/></way>'
+                '</osm>')
+    assert ogr.Open(osm).GetDriver().GetName() == 'OSM'
+    assert_refused(wm, {'RIVERS': osm, 'RIVERS_LAYER': 'lines',
+                        'RIVERS_WHERE': 'nosuchfield = 1'},
+                   all_of=['RIVERS_WHERE', 'nosuchfield', 'lines'])
+    gpkg = os.path.join(conftest.DATA_DIR, 'osm_liechtenstein_2013.gpkg')
+    vrt = os.path.join(tmp_dir, 'rivers.vrt')
+    with open(vrt, 'w') as f:
+        f.write('<OGRVRTDataSource><OGRVRTLayer name="rivers"><SrcDataSource>%s'
+                '</SrcDataSource><SrcLayer>rivers</SrcLayer></OGRVRTLayer>'
+                '</OGRVRTDataSource>' % gpkg)
+    assert_refused(wm, {'RIVERS': vrt, 'RIVERS_LAYER': 'rivers',
+                        'RIVERS_WHERE': 'nosuchfield = 1'},
+                   all_of=['RIVERS_WHERE', 'nosuchfield', 'rivers.vrt'])
+
+
 def test_valid_where_still_applies(wm, simple_scene, tmp_dir):
     """The first read that checks a filter leaves the layer's reading
     where it starts: every feature the filter selects is meshed."""
