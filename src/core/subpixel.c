@@ -168,6 +168,15 @@ static int add_cell(wm_hidden *h, const wm_field *f, int32_t c, int32_t r)
     return 1;
 }
 
+/* Makes the cells on both sides of the edge from sample (c, r) along x
+ * or y ambiguous. */
+static int add_edge_cells(wm_hidden *h, const wm_field *f, int32_t c, int32_t r,
+                          int vertical)
+{
+    return vertical ? add_cell(h, f, c - 1, r) && add_cell(h, f, c, r)
+                    : add_cell(h, f, c, r - 1) && add_cell(h, f, c, r);
+}
+
 /* Lists edge `id` with its k crossings. */
 static int add_edge(wm_hidden *h, uint64_t id, const int32_t *off, int k)
 {
@@ -196,9 +205,7 @@ static int search_edge(wm_hidden *h, const wm_field *f, wm_probe *probe,
         return k == 0;
     if (!add_edge(h, edge_id(f->w - 1, c, r, vertical), off, k))
         return 0;
-    /* the cells on both sides */
-    return vertical ? add_cell(h, f, c - 1, r) && add_cell(h, f, c, r)
-                    : add_cell(h, f, c, r - 1) && add_cell(h, f, c, r);
+    return add_edge_cells(h, f, c, r, vertical);
 }
 
 /* Bits of a tile row of samples (WM_TILE + 1 values): where |v| < 1 pixel
@@ -358,8 +365,7 @@ static int loose_edge(wm_hidden *h, const wm_field *f, wm_probe *probe,
         return 0;
     if (k < 3)
         return 1;
-    return vertical ? add_cell(h, f, c - 1, r) && add_cell(h, f, c, r)
-                    : add_cell(h, f, c, r - 1) && add_cell(h, f, c, r);
+    return add_edge_cells(h, f, c, r, vertical);
 }
 
 /* The sides of the ambiguous cells whose samples differ in class (but
