@@ -133,6 +133,33 @@ def test_block_too_large_raster(wm, simple_options):
                    any_of=['BLOCK_SIZE', 'memory'], flags=gdal.OF_RASTER)
 
 
+def test_grid_too_many_blocks_per_side(wm, tmp_dir):
+    """Two rivers 3,000 km apart over 2 m blocks: 1.5 M blocks per side,
+    more than 2^20. Refused at open, naming the grid and the way out."""
+    src = os.path.join(tmp_dir, 'far_apart.gpkg')
+    scenes.write_layer(src, 'rivers', ogr.wkbLineString, 3857,
+                       [{'geom': 'LINESTRING (0 0, 10 0)', 'width': 2.0},
+                        {'geom': 'LINESTRING (3000000 0, 3000010 0)', 'width': 2.0}],
+                       fields=[('width', 'Real')])
+    assert_refused(wm, {'RIVERS': src, 'WIDTH_FIELD': 'width', 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 2},
+                   all_of=['blocks', 'larger BLOCK_SIZE'])
+
+
+def test_sparse_grid_accepted(wm, tmp_dir):
+    """The same two rivers over 64 m blocks: a grid of 46,900 x 1 blocks, two
+    of them in reach. Accepted, and a read visits only those (the index and
+    the walk grow with the input, not with the grid)."""
+    src = os.path.join(tmp_dir, 'far_apart.gpkg')
+    scenes.write_layer(src, 'rivers', ogr.wkbLineString, 3857,
+                       [{'geom': 'LINESTRING (10 10, 20 10)', 'width': 2.0},
+                        {'geom': 'LINESTRING (3000010 10, 3000020 10)', 'width': 2.0}],
+                       fields=[('width', 'Real')])
+    ds, cap = wm.open({'RIVERS': src, 'WIDTH_FIELD': 'width', 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 64})
+    assert ds is not None, cap.text
+    blocks = sorted((f['block_x'], f['block_y']) for f in ds.GetLayerByName('water'))
+    assert blocks == [(0, 0), (46875, 0)], blocks
+
+
 def test_neither_rivers_nor_lakes(wm):
     assert_refused(wm, {'WIDTH': 5}, all_of=['RIVERS', 'LAKES'])
 

@@ -3,6 +3,7 @@ the CLI: a cancelled run reports CPLE_UserInterrupt and writes nothing."""
 
 import math
 import os
+import re
 import signal
 import subprocess
 import time
@@ -168,3 +169,34 @@ def test_dense_river_bounded(tmp_dir):
     water = out.GetLayerByName('water')
     got = sum(f.GetGeometryRef().GetArea() for f in water)
     assert abs(got - want) <= 0.01 * want, (got, want)
+
+
+def test_wide_river_over_tiny_blocks_opens_cheaply(tmp_dir):
+    """One river of two points, 10 m long and 100 km wide, over 13 m blocks
+    (issue 13): the grid has 7,700 x 7,700 blocks, nearly all of them in
+    reach of the river. The index holds the river's one reach box, not a
+    row per block (was 26 s and 2.4 GB just to open), so opening it and
+    reading the blocks under a small spatial filter fits a 1 GB
+    address-space cap in seconds, and the blocks read are the river's."""
+    import resource
+    src = os.path.join(tmp_dir, 'wide.gpkg')
+    scenes.write_layer(src, 'rivers', ogr.wkbLineString, 32631,
+                       [{'geom': 'LINESTRING (500000 5000000, 500010 5000000)',
+                         'width': 100000.0}], fields=[('width', 'Real')])
+
+    def cap():
+        resource.setrlimit(resource.RLIMIT_AS, (1 << 30, 1 << 30))
+    t = time.time()
+    p = subprocess.run(['ogrinfo', '-ro', '-q', 'WATERMESH:', '-oo', 'RIVERS=' + src,
+                        '-oo', 'WIDTH_FIELD=width', '-oo', 'PIXEL_SIZE=1', '-oo', 'BLOCK_SIZE=13',
+                        'water', '-spat', '500000', '5000000', '500030', '5000030'],
+                       stdout=subprocess.PIPE, stderr=subprocess.PIPE, universal_newlines=True,
+                       timeout=120, preexec_fn=cap)
+    took = time.time() - t
+    assert p.returncode == 0, p.stderr
+    assert took < 10, 'took %.1f s' % took
+    # blocks 38461..38463 x 384615..384617 (3 x 3, whole water squares)
+    blocks = set(re.findall(r'block_x \(Integer\) = (\d+)\s+block_y \(Integer\) = (\d+)',
+                            p.stdout))
+    assert blocks == {(str(x), str(y)) for x in range(38461, 38464)
+                      for y in range(384615, 384618)}, sorted(blocks)

@@ -108,9 +108,15 @@ int main(int argc, char **argv)
     }
     if (!s)
         return 1;
-    int64_t *blocks = NULL;
+    uint64_t count = 0;
     size_t nblocks = 0;
-    WMSceneBlocks(s, NULL, &blocks, &nblocks);
+    WMBlockWalk w;
+    WMBlockCount(s, NULL, &count);
+    int64_t *blocks = VSIMalloc2((size_t)count + 1, 2 * sizeof *blocks);
+    WMBlockWalkBegin(&w, s, NULL);
+    if (!blocks || !WMBlockWalkNext(&w, blocks, (size_t)count, &nblocks))
+        return 1;
+    WMBlockWalkEnd(&w);
     const int ncpu = CPLGetNumCPUs() < 64 ? CPLGetNumCPUs() : 64;
     printf("| path | host threads | field s | samples | pairs | samples/s | "
            "pairs/s |\n|---|---|---|---|---|---|---|\n");

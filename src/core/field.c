@@ -51,57 +51,10 @@ static int64_t floordiv128(wm_i128 a, wm_i128 b)
     return (int64_t)q;
 }
 
-static int cmp_u32(const void *a, const void *b)
-{
-    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
-    return (x > y) - (x < y);
-}
-
 static int cmp_i32(const void *a, const void *b)
 {
     const int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
     return (x > y) - (x < y);
-}
-
-/* Sorted, de-duplicated union of the CSR lists of the blocks covering the
- * window. Caller frees *out. */
-static wm_status gather(const wm_scene *s, const size_t *start,
-                        const uint32_t *items, int64_t bx0, int64_t by0,
-                        int64_t bx1, int64_t by1, uint32_t **out, size_t *n)
-{
-    size_t total = 0;
-    *out = NULL;
-    *n = 0;
-    for (int64_t by = by0; by <= by1; by++)
-        for (int64_t bx = bx0; bx <= bx1; bx++)
-        {
-            const size_t k = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
-            total += start[k + 1] - start[k];
-        }
-    uint32_t *v = malloc((total ? total : 1) * sizeof *v);
-    if (!v)
-        return WM_ERR_NOMEM;
-    size_t m = 0;
-    for (int64_t by = by0; by <= by1; by++)
-        for (int64_t bx = bx0; bx <= bx1; bx++)
-        {
-            const size_t k = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
-            memcpy(v + m, items + start[k],
-                   (start[k + 1] - start[k]) * sizeof *v);
-            m += start[k + 1] - start[k];
-        }
-    if (bx1 > bx0 || by1 > by0)
-    {
-        qsort(v, m, sizeof *v, cmp_u32);
-        size_t u = 0;
-        for (size_t i = 0; i < m; i++)
-            if (u == 0 || v[u - 1] != v[i])
-                v[u++] = v[i];
-        m = u;
-    }
-    *out = v;
-    *n = m;
-    return WM_OK;
 }
 
 /* Working state of one window computation. */
@@ -109,9 +62,10 @@ typedef struct
 {
     const wm_scene *s;
     wm_field *f;
-    int64_t X0, Y0; /* lattice of window sample (0, 0) */
-    int64_t tsq;    /* tile side, lattice */
-    uint32_t *segs, *polys;
+    int64_t X0, Y0;               /* lattice of window sample (0, 0) */
+    int64_t tsq;                  /* tile side, lattice */
+    uint32_t *ids;                /* the window's items (owned) */
+    const uint32_t *segs, *polys; /* in ids */
     size_t nsegs, npolys;
     /* tile lists (CSR over ntx*nty) */
     size_t *tseg_start;
@@ -953,13 +907,12 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
             by1 = s->by0 + s->nby - 1;
         if (bx0 <= bx1 && by0 <= by1)
         {
-            st = gather(s, s->blk_seg_start, s->blk_seg, bx0, by0, bx1, by1,
-                        &wk.segs, &wk.nsegs);
-            if (st == WM_OK)
-                st = gather(s, s->blk_poly_start, s->blk_poly, bx0, by0, bx1,
-                            by1, &wk.polys, &wk.npolys);
-            if (st != WM_OK)
+            const wm_box blocks = {bx0, by0, bx1, by1};
+            if (wm_scene_items(s, blocks, &wk.ids, &wk.nsegs, &wk.npolys) !=
+                WM_OK)
                 goto nomem;
+            wk.segs = wk.ids;
+            wk.polys = wk.ids ? wk.ids + wk.nsegs : NULL;
         }
     }
     haspoly = calloc(wk.npolys + 1, 1);
@@ -1026,8 +979,7 @@ cleanup:
     batch_buf_free(&bb);
     free(cand);
     free(haspoly);
-    free(wk.segs);
-    free(wk.polys);
+    free(wk.ids);
     free(wk.tseg_start);
     free(wk.tseg);
     free(wk.tedge_start);

@@ -637,13 +637,13 @@ wm_status wm_probe_init(wm_probe *p, const wm_scene *s, int64_t bx, int64_t by)
         by >= s->by0 + s->nby)
         return WM_OK;
     const int32_t S = s->n * WM_Q;
-    const size_t blk = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
+    const wm_box blk = {bx, by, bx, by};
     p->X0 = bx * (int64_t)S;
     p->Y0 = by * (int64_t)S;
-    p->segs = s->blk_seg + s->blk_seg_start[blk];
-    p->nsegs = s->blk_seg_start[blk + 1] - s->blk_seg_start[blk];
-    p->polys = s->blk_poly + s->blk_poly_start[blk];
-    p->npolys = s->blk_poly_start[blk + 1] - s->blk_poly_start[blk];
+    if (wm_scene_items(s, blk, &p->ids, &p->nsegs, &p->npolys) != WM_OK)
+        return WM_ERR_NOMEM;
+    p->segs = p->ids;
+    p->polys = p->ids ? p->ids + p->nsegs : NULL;
     if (build_river_index(p, S) != WM_OK ||
         (p->npolys && build_lake_index(p, S) != WM_OK))
     {
@@ -657,6 +657,7 @@ void wm_probe_free(wm_probe *p)
 {
     if (!p)
         return;
+    free(p->ids);
     wm_cells_free(&p->cells);
     wm_cells_free(&p->lcells);
     wm_cells_free(&p->lrows);

@@ -26,9 +26,10 @@ extern "C"
     {
         const wm_scene *s;
         int64_t X0, Y0;       /**< block origin, global lattice */
-        const uint32_t *segs; /**< the block's river segments (borrowed) */
+        uint32_t *ids;        /**< the block's items (owned): segs, polys */
+        const uint32_t *segs; /**< the block's river segments, in ids */
         size_t nsegs;
-        const uint32_t *polys; /**< the block's lake polygons (borrowed) */
+        const uint32_t *polys; /**< the block's lake polygons, in ids */
         size_t npolys;
         /** river segments by cell of the block, each registered in the
          *  cells its box grown by radius + WM_PROBE_REACH touches; segments

@@ -1,11 +1,15 @@
 /*
- * scene.c - the global block grid and the per-block index of the input.
+ * scene.c - the global block grid and the index of which blocks each input
+ * item reaches.
  *
- * Each river segment is registered in every block its capsule, grown by the
- * clamp band, may reach; each lake polygon in every block its bounding box,
- * grown by the band, touches (a polygon's inside test needs all its edges,
- * so polygons are indexed whole). Two passes (count, fill) into CSR arrays:
- * O(input + registrations), no per-item allocation.
+ * A river segment reaches the blocks its capsule, grown by the clamp band,
+ * may touch; a lake polygon those its bounding box, grown by the band,
+ * touches (a polygon's inside test needs all its edges, so polygons are
+ * indexed whole). Each item's reach is one box of block indices, and the
+ * boxes go into a packed Hilbert R-tree: O(input log input) to build and
+ * O(input) memory whatever the grid's area, so a 100 km wide river over
+ * 13 m blocks costs what its one segment costs. A block asks the tree for
+ * its items; a walk over the non-empty blocks asks it for a row's runs.
  */
 #include "scene.h"
 
@@ -43,80 +47,268 @@ static int64_t seg_grow(const wm_scene *s, const wm_river_seg *g)
     return (int64_t)ceil(g->r) + (int64_t)s->band * WM_Q + 1;
 }
 
-/* Calls visit(block_linear_index) for every block an item reaches; returns
- * the count. Block ranges are clipped to the scene grid. */
-typedef struct
+/* Block range an item reaches: a river segment's capsule or a polygon's box,
+ * grown by the clamp band. */
+static wm_box item_reach(const wm_scene *s, size_t i)
 {
-    size_t *count;
-    size_t *pos;
-    uint32_t *out;
-} fill_state;
-
-static void visit_range(const wm_scene *s, int64_t x0, int64_t y0, int64_t x1,
-                        int64_t y1, uint32_t item, fill_state *st)
-{
-    for (int64_t by = y0; by <= y1; by++)
-        for (int64_t bx = x0; bx <= x1; bx++)
-        {
-            if (bx < s->bx0 || by < s->by0 || bx >= s->bx0 + s->nbx ||
-                by >= s->by0 + s->nby)
-                continue;
-            const size_t k = (size_t)((by - s->by0) * s->nbx + (bx - s->bx0));
-            if (st->out)
-                st->out[st->pos[k]++] = item;
-            else
-                st->count[k]++;
-        }
+    wm_box r;
+    if (i < s->nsegs)
+        block_range(s, seg_box(&s->segs[i]), seg_grow(s, &s->segs[i]), &r.x0,
+                    &r.y0, &r.x1, &r.y1);
+    else
+        block_range(s, s->poly_box[i - s->nsegs], (int64_t)s->band * WM_Q + 1,
+                    &r.x0, &r.y0, &r.x1, &r.y1);
+    return r;
 }
 
-static wm_status build_csr(wm_scene *s, int polys, size_t **start_out,
-                           uint32_t **items_out)
+static int boxes_meet(const wm_box *a, const wm_box *b)
 {
-    const size_t nblk = (size_t)(s->nbx * s->nby);
-    const int64_t band = (int64_t)s->band * WM_Q + 1;
-    size_t *start = calloc(nblk + 1, sizeof *start);
-    size_t *pos = NULL;
-    uint32_t *items = NULL;
-    fill_state st = {start + 1, NULL, NULL};
-    const size_t nitems = polys ? s->npolys : s->nsegs;
-    for (int pass = 0; pass < 2; pass++)
+    return a->x0 <= b->x1 && b->x0 <= a->x1 && a->y0 <= b->y1 && b->y0 <= a->y1;
+}
+
+/* Position of (x, y) on the Hilbert curve of a 2^21 square. */
+static uint64_t hilbert(uint32_t x, uint32_t y)
+{
+    const uint32_t n = UINT32_C(1) << 21;
+    uint64_t d = 0;
+    for (uint32_t h = n / 2; h > 0; h /= 2)
     {
-        if (!start)
-            goto nomem;
-        for (size_t i = 0; i < nitems; i++)
+        const uint32_t rx = (x & h) != 0, ry = (y & h) != 0;
+        d += (uint64_t)h * h * ((3 * rx) ^ ry);
+        if (ry == 0)
         {
-            int64_t x0, y0, x1, y1;
-            if (polys)
-                block_range(s, s->poly_box[i], band, &x0, &y0, &x1, &y1);
-            else
-                block_range(s, seg_box(&s->segs[i]), seg_grow(s, &s->segs[i]),
-                            &x0, &y0, &x1, &y1);
-            visit_range(s, x0, y0, x1, y1, (uint32_t)i, &st);
-        }
-        if (pass == 0)
-        {
-            pos = wm_csr_begin(start, nblk);
-            items = malloc((start[nblk] ? start[nblk] : 1) * sizeof *items);
-            if (!items || !pos)
-                goto nomem;
-            st.pos = pos;
-            st.out = items;
+            if (rx == 1)
+            {
+                x = n - 1 - x;
+                y = n - 1 - y;
+            }
+            const uint32_t t = x;
+            x = y;
+            y = t;
         }
     }
-    free(pos);
-    *start_out = start;
-    *items_out = items;
+    return d;
+}
+
+typedef struct
+{
+    uint64_t key;
+    uint32_t item;
+} hkey;
+
+static int cmp_hkey(const void *a, const void *b)
+{
+    const hkey *p = a, *q = b;
+    if (p->key != q->key)
+        return (p->key > q->key) - (p->key < q->key);
+    return (p->item > q->item) - (p->item < q->item);
+}
+
+static wm_box box_union(wm_box a, const wm_box *b)
+{
+    a.x0 = b->x0 < a.x0 ? b->x0 : a.x0;
+    a.y0 = b->y0 < a.y0 ? b->y0 : a.y0;
+    a.x1 = b->x1 > a.x1 ? b->x1 : a.x1;
+    a.y1 = b->y1 > a.y1 ? b->y1 : a.y1;
+    return a;
+}
+
+/* Level sizes of a tree of n leaves; returns the total box count. */
+static size_t plan_levels(wm_rtree *t, size_t n)
+{
+    size_t total = 0, m = n;
+    t->nlevels = 0;
+    while (n > 0)
+    {
+        t->level[t->nlevels++] = total;
+        total += m;
+        if (m == 1)
+            break;
+        m = (m + WM_RTREE_FANOUT - 1) / WM_RTREE_FANOUT;
+    }
+    t->level[t->nlevels] = total;
+    return total;
+}
+
+/* Packs every item's reach into s->reach: leaves in Hilbert order of their
+ * centres (relative to the grid's first block, so keys fit 21 bits), ties
+ * by item, then each level from the one below. */
+static wm_status build_reach(wm_scene *s)
+{
+    wm_rtree *t = &s->reach;
+    const size_t n = s->nsegs + s->npolys;
+    const size_t total = plan_levels(t, n);
+    if (n == 0)
+        return WM_OK;
+    hkey *k = malloc(n * sizeof *k);
+    t->box = malloc(total * sizeof *t->box);
+    t->item = malloc(n * sizeof *t->item);
+    if (!k || !t->box || !t->item)
+    {
+        free(k);
+        return WM_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < n; i++)
+    {
+        const wm_box r = item_reach(s, i);
+        k[i].key = hilbert((uint32_t)((r.x0 + r.x1) / 2 - s->bx0),
+                           (uint32_t)((r.y0 + r.y1) / 2 - s->by0));
+        k[i].item = (uint32_t)i;
+    }
+    qsort(k, n, sizeof *k, cmp_hkey);
+    for (size_t i = 0; i < n; i++)
+    {
+        t->item[i] = k[i].item;
+        t->box[i] = item_reach(s, k[i].item);
+    }
+    free(k);
+    for (int l = 1; l < t->nlevels; l++)
+        for (size_t j = t->level[l]; j < t->level[l + 1]; j++)
+        {
+            const size_t c0 =
+                t->level[l - 1] + (j - t->level[l]) * WM_RTREE_FANOUT;
+            const size_t c1 = c0 + WM_RTREE_FANOUT < t->level[l]
+                                  ? c0 + WM_RTREE_FANOUT
+                                  : t->level[l];
+            wm_box b = t->box[c0];
+            for (size_t c = c0 + 1; c < c1; c++)
+                b = box_union(b, &t->box[c]);
+            t->box[j] = b;
+        }
     return WM_OK;
-nomem:
-    free(start);
-    free(pos);
-    free(items);
-    return WM_ERR_NOMEM;
+}
+
+/* Appends the leaves of t whose box meets q to *out (n, cap): their slots,
+ * depth first. */
+static wm_status reach_query(const wm_rtree *t, const wm_box *q, size_t **out,
+                             size_t *n, size_t *cap)
+{
+    size_t stack[WM_RTREE_LEVELS * WM_RTREE_FANOUT + 1];
+    int sp = 0;
+    if (t->nlevels == 0)
+        return WM_OK;
+    stack[sp++] = t->level[t->nlevels - 1];
+    while (sp > 0)
+    {
+        const size_t j = stack[--sp];
+        if (!boxes_meet(&t->box[j], q))
+            continue;
+        if (j < t->level[1])
+        {
+            if (!wm_push((void **)out, n, cap, &j, sizeof j))
+                return WM_ERR_NOMEM;
+            continue;
+        }
+        int l = 1;
+        while (j >= t->level[l + 1])
+            l++;
+        const size_t c0 = t->level[l - 1] + (j - t->level[l]) * WM_RTREE_FANOUT;
+        const size_t c1 = c0 + WM_RTREE_FANOUT < t->level[l]
+                              ? c0 + WM_RTREE_FANOUT
+                              : t->level[l];
+        for (size_t c = c1; c-- > c0;)
+            stack[sp++] = c;
+    }
+    return WM_OK;
+}
+
+static int cmp_u32(const void *a, const void *b)
+{
+    const uint32_t x = *(const uint32_t *)a, y = *(const uint32_t *)b;
+    return (x > y) - (x < y);
+}
+
+wm_status wm_scene_items(const wm_scene *s, wm_box blocks, uint32_t **ids,
+                         size_t *nsegs, size_t *npolys)
+{
+    size_t *leaf = NULL, n = 0, cap = 0;
+    *ids = NULL;
+    *nsegs = *npolys = 0;
+    if (reach_query(&s->reach, &blocks, &leaf, &n, &cap) != WM_OK)
+    {
+        free(leaf);
+        return WM_ERR_NOMEM;
+    }
+    if (n == 0)
+        return WM_OK;
+    uint32_t *v = malloc(n * sizeof *v);
+    if (!v)
+    {
+        free(leaf);
+        return WM_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < n; i++)
+        v[i] = s->reach.item[leaf[i]];
+    free(leaf);
+    qsort(v, n, sizeof *v, cmp_u32);
+    size_t k = 0;
+    while (k < n && v[k] < s->nsegs)
+        k++;
+    for (size_t i = k; i < n; i++)
+        v[i] -= (uint32_t)s->nsegs;
+    *ids = v;
+    *nsegs = k;
+    *npolys = n - k;
+    return WM_OK;
+}
+
+static int cmp_run(const void *a, const void *b)
+{
+    const int64_t *p = a, *q = b;
+    if (p[0] != q[0])
+        return (p[0] > q[0]) - (p[0] < q[0]);
+    return (p[1] > q[1]) - (p[1] < q[1]);
+}
+
+wm_status wm_scene_row_runs(const wm_scene *s, int64_t by, int64_t x0,
+                            int64_t x1, int64_t **runs, size_t *nruns)
+{
+    const wm_box q = {x0, by, x1, by};
+    size_t *leaf = NULL, n = 0, cap = 0;
+    *runs = NULL;
+    *nruns = 0;
+    if (reach_query(&s->reach, &q, &leaf, &n, &cap) != WM_OK)
+    {
+        free(leaf);
+        return WM_ERR_NOMEM;
+    }
+    if (n == 0)
+        return WM_OK;
+    int64_t *r = malloc(2 * n * sizeof *r);
+    if (!r)
+    {
+        free(leaf);
+        return WM_ERR_NOMEM;
+    }
+    for (size_t i = 0; i < n; i++)
+    {
+        const wm_box *b = &s->reach.box[leaf[i]];
+        r[2 * i] = b->x0 > x0 ? b->x0 : x0;
+        r[2 * i + 1] = b->x1 < x1 ? b->x1 : x1;
+    }
+    free(leaf);
+    qsort(r, n, 2 * sizeof *r, cmp_run);
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+        if (m > 0 && r[2 * i] <= r[2 * m - 1] + 1)
+        {
+            if (r[2 * i + 1] > r[2 * m - 1])
+                r[2 * m - 1] = r[2 * i + 1];
+        }
+        else
+        {
+            r[2 * m] = r[2 * i];
+            r[2 * m + 1] = r[2 * i + 1];
+            m++;
+        }
+    *runs = r;
+    *nruns = m;
+    return WM_OK;
 }
 
 wm_status wm_scene_index(wm_scene *s, const wm_ctx *ctx)
 {
-    if (s->nsegs > UINT32_MAX || s->npolys > UINT32_MAX)
+    if (s->nsegs + s->npolys > UINT32_MAX)
         return wm_fail(ctx, WM_ERR_INVALID, "too many input segments");
     free(s->poly_box);
     s->poly_box = malloc((s->npolys ? s->npolys : 1) * sizeof *s->poly_box);
@@ -181,17 +373,14 @@ wm_status wm_scene_index(wm_scene *s, const wm_ctx *ctx)
         s->nbx = x1 - x0 + 1;
         s->nby = y1 - y0 + 1;
         if (s->nbx > (1 << 20) || s->nby > (1 << 20) ||
-            s->nbx * s->nby > (INT64_C(1) << 26))
+            s->nbx * s->nby > (INT64_C(1) << 39))
             return wm_fail(ctx, WM_ERR_INVALID,
                            "the scene spans %lld x %lld blocks: too many; "
                            "use a larger BLOCK_SIZE",
                            (long long)s->nbx, (long long)s->nby);
     }
-    wm_status st = build_csr(s, 0, &s->blk_seg_start, &s->blk_seg);
-    if (st == WM_OK)
-        st = build_csr(s, 1, &s->blk_poly_start, &s->blk_poly);
-    if (st != WM_OK)
-        return wm_fail(ctx, st, "out of memory indexing the scene");
+    if (build_reach(s) != WM_OK)
+        return wm_fail(ctx, WM_ERR_NOMEM, "out of memory indexing the scene");
     return WM_OK;
 }
 
@@ -203,9 +392,7 @@ void wm_scene_free(wm_scene *s)
     free(s->edges);
     free(s->poly_start);
     free(s->poly_box);
-    free(s->blk_seg_start);
-    free(s->blk_seg);
-    free(s->blk_poly_start);
-    free(s->blk_poly);
+    free(s->reach.box);
+    free(s->reach.item);
     memset(s, 0, sizeof *s);
 }

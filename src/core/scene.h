@@ -52,6 +52,24 @@ extern "C"
         int64_t x0, y0, x1, y1;
     } wm_box;
 
+/** Children per node of the reach R-tree. */
+#define WM_RTREE_FANOUT 16
+/** Levels the reach R-tree may have (16^15 leaves and more). */
+#define WM_RTREE_LEVELS 16
+
+    /** A static R-tree of boxes, packed in Hilbert order of their centres
+     *  (as FlatGeobuf's index): level 0 holds the leaves, level l + 1 one
+     *  node per WM_RTREE_FANOUT consecutive nodes of level l; the root is
+     *  the one node of the top level. */
+    typedef struct
+    {
+        wm_box *box;    /**< every level's boxes, leaves first (owned) */
+        uint32_t *item; /**< per leaf: the item it holds (owned) */
+        size_t level[WM_RTREE_LEVELS + 1]; /**< level l is box[level[l] ..
+                                              level[l + 1] - 1] */
+        int nlevels;                       /**< 0 when empty */
+    } wm_rtree;
+
     /**
      * The scene. Lake polygons are filled even-odd over all their rings (outer
      * and holes alike, so ring orientation in the input does not matter and a
@@ -76,21 +94,36 @@ extern "C"
         /* block grid covering everything within reach of the input */
         int64_t bx0, by0; /**< first block index */
         int64_t nbx, nby; /**< number of blocks */
-        /* per block (row-major, by * nbx + bx): river segments and polygons
-         * within reach, as CSR arrays (owned) */
-        size_t *blk_seg_start;
-        uint32_t *blk_seg;
-        size_t *blk_poly_start;
-        uint32_t *blk_poly;
+        /** which blocks each item (river segments, then lake polygons)
+         *  reaches, as a block range, in a packed R-tree: building and
+         *  memory grow with the input, never with the grid's area */
+        wm_rtree reach;
 
         size_t river_vertices; /**< input counts, for the vertex ratio V */
         size_t lake_vertices;
     } wm_scene;
 
-    /** Builds the polygon boxes, the block range and the per-block index from
+    /** Builds the polygon boxes, the block range and the reach index from
      *  segs, edges, poly_start, npolys, n and band (the caller fills those;
      * every polygon has at least one edge). */
     wm_status wm_scene_index(wm_scene *s, const wm_ctx *ctx);
+
+    /**
+     * The items within reach of any block of `blocks` (block indices,
+     * inclusive): ids[0 .. *nsegs - 1] are river segments, then *npolys lake
+     * polygons, each part ascending and without repeats. *ids is the
+     * caller's to free (NULL when there is none).
+     */
+    wm_status wm_scene_items(const wm_scene *s, wm_box blocks, uint32_t **ids,
+                             size_t *nsegs, size_t *npolys);
+
+    /**
+     * The blocks of row `by`, from x0 to x1, that some item reaches, as
+     * *nruns runs (first, last): ascending, disjoint and not adjacent.
+     * *runs is the caller's to free (NULL when there is none).
+     */
+    wm_status wm_scene_row_runs(const wm_scene *s, int64_t by, int64_t x0,
+                                int64_t x1, int64_t **runs, size_t *nruns);
 
     /** Frees everything the scene owns; s may be NULL. */
     void wm_scene_free(wm_scene *s);

@@ -42,6 +42,22 @@ struct ResultDeleter
 };
 using ResultPtr = std::shared_ptr<wm_block_result>;
 
+/* A walk over a scene's blocks that ends itself. */
+struct BlockWalk
+{
+    WMBlockWalk w;
+    BlockWalk(const WMScene *s, const double *spat)
+    {
+        WMBlockWalkBegin(&w, s, spat);
+    }
+    ~BlockWalk()
+    {
+        WMBlockWalkEnd(&w);
+    }
+    BlockWalk(const BlockWalk &) = delete;
+    BlockWalk &operator=(const BlockWalk &) = delete;
+};
+
 class WaterMeshLayer;
 
 class WaterMeshDataset final : public GDALDataset
@@ -111,12 +127,13 @@ class WaterMeshLayer final : public OGRLayer,
     WaterMeshDataset *m_poDS;
     bool m_bMesh;
     OGRFeatureDefn *m_poDefn;
-    /* the blocks of a read (bx, by pairs, for the filter's envelope), and
-     * the results of those from m_iChunk0 on that the read holds */
+    /* a read walks the blocks (for the filter's envelope) a chunk at a
+     * time: the chunk's blocks (bx, by pairs) and their results */
+    std::unique_ptr<BlockWalk> m_poWalk;
+    bool m_bDone = false;
     std::vector<int64_t> m_anBlocks;
     std::vector<ResultPtr> m_aoChunk;
-    bool m_bComputed = false;
-    size_t m_iChunk0 = 0, m_iBlock = 0, m_iPoly = 0;
+    size_t m_iBlock = 0, m_iPoly = 0;
 
   public:
     WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh);
@@ -128,10 +145,11 @@ class WaterMeshLayer final : public OGRLayer,
     }
     void ResetReading() override
     {
-        m_bComputed = false;
+        m_poWalk.reset();
+        m_bDone = false;
         m_anBlocks.clear();
         m_aoChunk.clear();
-        m_iChunk0 = m_iBlock = m_iPoly = 0;
+        m_iBlock = m_iPoly = 0;
     }
     OGRFeature *GetNextRawFeature();
     DEFINE_GET_NEXT_FEATURE_THROUGH_RAW(WaterMeshLayer)
@@ -336,7 +354,9 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
 {
     try
     {
-        if (!m_bComputed)
+        if (m_bDone)
+            return nullptr;
+        if (!m_poWalk)
         {
             double spat[4];
             if (m_poFilterGeom)
@@ -348,43 +368,36 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
                 spat[2] = env.MaxX;
                 spat[3] = env.MaxY;
             }
-            int64_t *blocks = nullptr;
-            size_t n = 0;
-            m_bComputed = true;
-            if (!WMSceneBlocks(m_poDS->m_poScene,
-                               m_poFilterGeom ? spat : nullptr, &blocks, &n))
-                return nullptr;
-            m_anBlocks.assign(blocks, blocks + 2 * n);
-            VSIFree(blocks);
+            m_poWalk.reset(new BlockWalk(m_poDS->m_poScene,
+                                         m_poFilterGeom ? spat : nullptr));
             m_aoChunk.clear();
-            m_iChunk0 = m_iBlock = m_iPoly = 0;
+            m_iBlock = m_iPoly = 0;
         }
-        const size_t nblocks = m_anBlocks.size() / 2;
         for (;;)
         {
-            if (m_iBlock >= nblocks)
-                return nullptr;
-            if (m_iBlock < m_iChunk0 ||
-                m_iBlock >= m_iChunk0 + m_aoChunk.size())
+            if (m_iBlock >= m_aoChunk.size())
             {
                 /* the next blocks, computed a chunk at a time */
-                const size_t k =
-                    std::min(m_poDS->ChunkBlocks(), nblocks - m_iBlock);
-                m_iChunk0 = m_iBlock;
-                if (!m_poDS->Fetch(m_anBlocks.data() + 2 * m_iBlock, k,
-                                   &m_aoChunk))
+                const size_t k = m_poDS->ChunkBlocks();
+                size_t n = 0;
+                m_anBlocks.resize(2 * k);
+                m_aoChunk.clear();
+                m_iBlock = m_iPoly = 0;
+                if (!WMBlockWalkNext(&m_poWalk->w, m_anBlocks.data(), k, &n) ||
+                    n == 0 || !m_poDS->Fetch(m_anBlocks.data(), n, &m_aoChunk))
                 {
+                    /* the end, or an error that stands: stop */
                     m_aoChunk.clear();
-                    m_iBlock = nblocks; /* the error stands; stop */
+                    m_bDone = true;
                     return nullptr;
                 }
             }
-            if (m_iPoly < m_aoChunk[m_iBlock - m_iChunk0]->npolys)
+            if (m_iPoly < m_aoChunk[m_iBlock]->npolys)
                 break;
             m_iBlock++;
             m_iPoly = 0;
         }
-        const wm_block_result *r = m_aoChunk[m_iBlock - m_iChunk0].get();
+        const wm_block_result *r = m_aoChunk[m_iBlock].get();
         const size_t p = m_iPoly++;
         const WMScene *s = m_poDS->m_poScene;
         auto poFeature = new OGRFeature(m_poDefn);
@@ -427,27 +440,27 @@ GIntBig WaterMeshLayer::GetFeatureCount(int bForce)
     {
         /* every block's polygon count, computing (a chunk at a time, through
          * the bounded cache) the blocks not seen yet */
-        int64_t *blocks = nullptr;
-        size_t n = 0;
-        if (!WMSceneBlocks(m_poDS->m_poScene, nullptr, &blocks, &n))
-            return -1;
-        std::vector<int64_t> todo;
-        for (size_t i = 0; i < n; i++)
-            if (!m_poDS->m_oCounts.count({blocks[2 * i], blocks[2 * i + 1]}))
-            {
-                todo.push_back(blocks[2 * i]);
-                todo.push_back(blocks[2 * i + 1]);
-            }
-        bool ok = true;
         const size_t k = m_poDS->ChunkBlocks();
-        for (size_t i = 0; ok && i < todo.size() / 2; i += k)
-            ok = m_poDS->Fetch(todo.data() + 2 * i,
-                               std::min(k, todo.size() / 2 - i), nullptr);
+        std::vector<int64_t> chunk(2 * k), todo;
+        BlockWalk walk(m_poDS->m_poScene, nullptr);
         GIntBig total = 0;
-        for (size_t i = 0; ok && i < n; i++)
-            total += static_cast<GIntBig>(
-                m_poDS->m_oCounts[{blocks[2 * i], blocks[2 * i + 1]}]);
-        VSIFree(blocks);
+        bool ok = true;
+        size_t n = 0;
+        while (ok && (ok = WMBlockWalkNext(&walk.w, chunk.data(), k, &n)) &&
+               n > 0)
+        {
+            todo.clear();
+            for (size_t i = 0; i < n; i++)
+                if (!m_poDS->m_oCounts.count({chunk[2 * i], chunk[2 * i + 1]}))
+                {
+                    todo.push_back(chunk[2 * i]);
+                    todo.push_back(chunk[2 * i + 1]);
+                }
+            ok = m_poDS->Fetch(todo.data(), todo.size() / 2, nullptr);
+            for (size_t i = 0; ok && i < n; i++)
+                total += static_cast<GIntBig>(
+                    m_poDS->m_oCounts[{chunk[2 * i], chunk[2 * i + 1]}]);
+        }
         return ok ? total : -1;
     }
     catch (const std::exception &)

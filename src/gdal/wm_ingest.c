@@ -790,13 +790,16 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
     s->core.n = s->params.n;
     s->core.band = 2;
     {
-        wm_ctx ctx = {NULL, NULL, NULL};
-        if (wm_scene_index(&s->core, &ctx) != WM_OK)
+        char *msg = NULL;
+        wm_ctx ctx = {WMKeepFirstError, &msg, NULL};
+        const wm_status st = wm_scene_index(&s->core, &ctx);
+        if (st != WM_OK)
         {
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "WATERMESH: the scene is too large for BLOCK_SIZE=%g "
-                     "(or out of memory indexing it).",
-                     s->params.block);
+            CPLError(CE_Failure,
+                     st == WM_ERR_NOMEM ? CPLE_OutOfMemory : CPLE_AppDefined,
+                     "WATERMESH: BLOCK_SIZE=%g: %s.", s->params.block,
+                     msg ? msg : "indexing the scene failed");
+            CPLFree(msg);
             goto fail;
         }
     }
@@ -827,58 +830,107 @@ void WMSceneFree(WMScene *s)
     CPLFree(s);
 }
 
-int WMSceneBlocks(const WMScene *s, const double *spat, int64_t **blocks,
-                  size_t *nblocks)
+void WMBlockWalkBegin(WMBlockWalk *w, const WMScene *s, const double *spat)
 {
     const wm_scene *c = &s->core;
-    int64_t x0 = c->bx0, y0 = c->by0, x1 = c->bx0 + c->nbx - 1,
-            y1 = c->by0 + c->nby - 1;
+    memset(w, 0, sizeof *w);
+    w->s = s;
+    w->x0 = c->bx0;
+    w->y0 = c->by0;
+    w->x1 = c->bx0 + c->nbx - 1;
+    w->y1 = c->by0 + c->nby - 1;
     if (spat)
     {
         /* clamp in double first: a huge filter must not overflow int64 */
         const double bs = s->params.block;
-        const double lo[2] = {(double)x0, (double)y0};
-        const double hi[2] = {(double)x1, (double)y1};
-        double f[4];
+        const double lo[2] = {(double)w->x0, (double)w->y0};
+        const double hi[2] = {(double)w->x1, (double)w->y1};
+        int64_t f[4];
         for (int i = 0; i < 4; i++)
         {
             const double v = floor(spat[i] / bs);
-            f[i] = v < lo[i & 1] - 1 ? lo[i & 1] - 1
-                                     : (v > hi[i & 1] + 1 ? hi[i & 1] + 1 : v);
+            f[i] = (int64_t)(v < lo[i & 1] - 1
+                                 ? lo[i & 1] - 1
+                                 : (v > hi[i & 1] + 1 ? hi[i & 1] + 1 : v));
         }
-        if ((int64_t)f[0] > x0)
-            x0 = (int64_t)f[0];
-        if ((int64_t)f[1] > y0)
-            y0 = (int64_t)f[1];
-        if ((int64_t)f[2] < x1)
-            x1 = (int64_t)f[2];
-        if ((int64_t)f[3] < y1)
-            y1 = (int64_t)f[3];
+        w->x0 = f[0] > w->x0 ? f[0] : w->x0;
+        w->y0 = f[1] > w->y0 ? f[1] : w->y0;
+        w->x1 = f[2] < w->x1 ? f[2] : w->x1;
+        w->y1 = f[3] < w->y1 ? f[3] : w->y1;
     }
-    *blocks = NULL;
-    *nblocks = 0;
-    if (x0 > x1 || y0 > y1)
-        return TRUE;
-    size_t n = 0;
-    int64_t *out = VSIMalloc2((size_t)((x1 - x0 + 1) * (y1 - y0 + 1)),
-                              2 * sizeof(int64_t));
-    if (!out)
+    w->by = w->y0 - 1; /* no row read yet */
+}
+
+/* Moves to the next row with runs; FALSE after a CPLError. At the end,
+ * w->by passes y1. */
+static int next_row(WMBlockWalk *w)
+{
+    while (w->irun >= w->nruns && w->by <= w->y1)
     {
-        CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
-        return FALSE;
-    }
-    for (int64_t by = y0; by <= y1; by++)
-        for (int64_t bx = x0; bx <= x1; bx++)
+        free(w->runs);
+        w->runs = NULL;
+        w->nruns = w->irun = 0;
+        if (++w->by > w->y1 || w->x0 > w->x1)
         {
-            const size_t k = (size_t)((by - c->by0) * c->nbx + (bx - c->bx0));
-            if (c->blk_seg_start[k + 1] == c->blk_seg_start[k] &&
-                c->blk_poly_start[k + 1] == c->blk_poly_start[k])
-                continue;
-            out[2 * n] = bx;
-            out[2 * n + 1] = by;
-            n++;
+            w->by = w->y1 + 1;
+            break;
         }
-    *blocks = out;
-    *nblocks = n;
+        if (wm_scene_row_runs(&w->s->core, w->by, w->x0, w->x1, &w->runs,
+                              &w->nruns) != WM_OK)
+        {
+            CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
+            return FALSE;
+        }
+        if (w->nruns)
+            w->bx = w->runs[0];
+    }
+    return TRUE;
+}
+
+int WMBlockWalkNext(WMBlockWalk *w, int64_t *out, size_t max, size_t *n)
+{
+    *n = 0;
+    while (*n < max)
+    {
+        if (!next_row(w))
+            return FALSE;
+        if (w->irun >= w->nruns)
+            break;
+        out[2 * *n] = w->bx;
+        out[2 * *n + 1] = w->by;
+        ++*n;
+        if (++w->bx > w->runs[2 * w->irun + 1] && ++w->irun < w->nruns)
+            w->bx = w->runs[2 * w->irun];
+    }
+    return TRUE;
+}
+
+void WMBlockWalkEnd(WMBlockWalk *w)
+{
+    /* the runs come from the core's malloc */
+    free(w->runs);
+    w->runs = NULL;
+    w->nruns = w->irun = 0;
+}
+
+int WMBlockCount(const WMScene *s, const double *spat, uint64_t *count)
+{
+    WMBlockWalk w;
+    WMBlockWalkBegin(&w, s, spat);
+    *count = 0;
+    for (;;)
+    {
+        if (!next_row(&w))
+        {
+            WMBlockWalkEnd(&w);
+            return FALSE;
+        }
+        if (w.irun >= w.nruns)
+            break;
+        for (size_t i = 0; i < w.nruns; i++)
+            *count += (uint64_t)(w.runs[2 * i + 1] - w.runs[2 * i] + 1);
+        w.irun = w.nruns;
+    }
+    WMBlockWalkEnd(&w);
     return TRUE;
 }

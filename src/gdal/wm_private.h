@@ -120,10 +120,28 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes,
                       CSLConstList papszOptions);
 void WMSceneFree(WMScene *s);
 
-/** Blocks of the scene touching the spatial filter (if any), in row-major
- *  order; skips blocks with nothing in reach. Caller frees *blocks. */
-int WMSceneBlocks(const WMScene *s, const double *spat, int64_t **blocks,
-                  size_t *nblocks);
+/** A walk over the blocks of a scene that something reaches, touching the
+ *  spatial filter (if any), in row-major order (rows from the lowest block
+ *  y, then x), a batch at a time: memory holds one row's runs, never the
+ *  grid's blocks. */
+typedef struct
+{
+    const WMScene *s;
+    int64_t x0, y0, x1, y1; /* the window, block indices */
+    int64_t by;             /* the row of runs */
+    int64_t *runs;          /* its runs (first, last) */
+    size_t nruns, irun;
+    int64_t bx; /* the next block, in runs[irun] */
+} WMBlockWalk;
+
+/** Starts a walk (spat: xmin, ymin, xmax, ymax, or NULL). */
+void WMBlockWalkBegin(WMBlockWalk *w, const WMScene *s, const double *spat);
+/** The next blocks, at most max (bx, by pairs into out); *n is 0 at the
+ *  end. FALSE after a CPLError. */
+int WMBlockWalkNext(WMBlockWalk *w, int64_t *out, size_t max, size_t *n);
+void WMBlockWalkEnd(WMBlockWalk *w);
+/** How many blocks a walk with this filter visits (row runs only). */
+int WMBlockCount(const WMScene *s, const double *spat, uint64_t *count);
 
 /** Called from the calling thread, in block order; takes ownership of res.
  *  Returns FALSE to stop the run (after a CPLError). */

@@ -456,22 +456,69 @@ static int write_block(void *user, wm_block_result *res)
     return ok;
 }
 
+/* Blocks per WMRunBlocks of a whole run: a batch's list is all the run
+ * holds of the grid. */
+#define WM_RUN_BATCH 65536
+
+static void add_stats(WMRunStats *to, const WMRunStats *st)
+{
+    for (int i = 0; i < WM_STAGE_COUNT; i++)
+        to->seconds[i] += st->seconds[i];
+    to->wall += st->wall;
+    to->blocks += st->blocks;
+    to->polygons += st->polygons;
+    to->vertices += st->vertices;
+    to->triangles += st->triangles;
+    to->mixed_tiles += st->mixed_tiles;
+    to->samples += st->samples;
+    to->pairs += st->pairs;
+}
+
 CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
                        GDALProgressFunc pfn, void *pArg)
 {
-    int64_t *blocks = NULL;
-    size_t nblocks = 0;
-    CPLErr err = CE_Failure;
-    if (WMSceneBlocks(s, s->params.have_spat ? s->params.spat : NULL, &blocks,
-                      &nblocks))
+    const double *spat = s->params.have_spat ? s->params.spat : NULL;
+    uint64_t total = 0, done = 0;
+    if (!WMBlockCount(s, spat, &total))
+        return CE_Failure;
+    int64_t *batch = VSIMalloc2(WM_RUN_BATCH, 2 * sizeof(int64_t));
+    if (!batch)
     {
-        gen_sink g = {s, hWater, hMesh};
-        WMRunStats st;
-        err = WMRunBlocks(s, blocks, nblocks, write_block, &g, pfn, pArg, &st);
-        if (err == CE_None && s->params.stats)
-            WMPrintStats(s, &st);
+        CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
+        return CE_Failure;
     }
-    VSIFree(blocks);
+    gen_sink g = {s, hWater, hMesh};
+    WMRunStats all;
+    memset(&all, 0, sizeof all);
+    WMBlockWalk w;
+    WMBlockWalkBegin(&w, s, spat);
+    CPLErr err = CE_None;
+    size_t n = 0;
+    do
+    {
+        if (!WMBlockWalkNext(&w, batch, WM_RUN_BATCH, &n))
+            err = CE_Failure;
+        else if (n > 0 || done == 0)
+        {
+            /* one run even for an empty scene: progress reaches 1 */
+            void *scaled =
+                total ? GDALCreateScaledProgress(
+                            (double)done / (double)total,
+                            (double)(done + n) / (double)total, pfn, pArg)
+                      : NULL;
+            WMRunStats st;
+            err = WMRunBlocks(s, batch, n, write_block, &g,
+                              scaled ? GDALScaledProgress : pfn,
+                              scaled ? scaled : pArg, &st);
+            GDALDestroyScaledProgress(scaled);
+            add_stats(&all, &st);
+            done += n;
+        }
+    } while (err == CE_None && n == WM_RUN_BATCH);
+    WMBlockWalkEnd(&w);
+    VSIFree(batch);
+    if (err == CE_None && s->params.stats)
+        WMPrintStats(s, &all);
     return err;
 }
 
