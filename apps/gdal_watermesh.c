@@ -109,11 +109,108 @@ static OGRLayerH make_layer(GDALDatasetH ds, const char *name,
     return l;
 }
 
-/* Moves every entry of folder `from` into folder `to`: files replace files
- * of the same name (rename() does that atomically), folders are merged
- * entry by entry, so an existing destination folder loses only what this
- * run rewrites. An entry that exists without `overwrite` is an error. */
-static int move_into_place(const char *from, const char *to, int overwrite)
+/* Formats whose file holds one layer. Named as a file (or always, for
+ * the JSON ones, which have no folder form), the destination becomes two
+ * files, <name>_water.<ext> and <name>_mesh.<ext>; named as a folder, the
+ * format's folder form holds water.<ext> and mesh.<ext>. */
+static int single_layer_file(GDALDriverH drv, const char *dst)
+{
+    static const char *const folder_form[] = {"ESRI Shapefile", "FlatGeobuf",
+                                              "MapInfo File", "CSV", NULL};
+    static const char *const file_only[] = {"GeoJSON", "GeoJSONSeq", NULL};
+    const char *name = GDALGetDriverShortName(drv);
+    for (int i = 0; file_only[i]; i++)
+        if (EQUAL(name, file_only[i]))
+            return TRUE;
+    for (int i = 0; folder_form[i]; i++)
+        if (EQUAL(name, folder_form[i]))
+            return *CPLGetExtension(dst) != '\0';
+    return FALSE;
+}
+
+/* The file a layer goes to under the single-layer rule: <name>_<layer>.<ext>
+ * beside dst (ext: dst's, else the format's). */
+static char *layer_file(GDALDriverH drv, const char *dst, const char *layer)
+{
+    const char *ext = CPLGetExtension(dst);
+    if (!*ext)
+        ext = GDALGetMetadataItem(drv, GDAL_DMD_EXTENSION, NULL);
+    char *base = CPLStrdup(CPLGetBasename(dst));
+    char *path = CPLStrdup(CPLFormFilename(
+        CPLGetPath(dst), CPLSPrintf("%s_%s", base, layer), ext));
+    CPLFree(base);
+    return path;
+}
+
+/* Moving the new output into place, undoably: every file it replaces is
+ * first renamed into a folder of old files, and on any failure the new
+ * files are removed and the old ones renamed back. */
+typedef struct
+{
+    const char *olddir;  /* where replaced files wait */
+    char **placed;       /* new entries moved into place */
+    char **old, **saved; /* replaced files, and where they wait */
+    int fail_at;         /* test hook: this rename fails (0: none) */
+    int renames;
+} swap;
+
+static int do_rename(swap *w, const char *from, const char *to)
+{
+    if (++w->renames == w->fail_at || VSIRename(from, to) != 0)
+    {
+        CPLError(CE_Failure, CPLE_FileIO,
+                 "gdal_watermesh: cannot move %s to %s.", from, to);
+        return FALSE;
+    }
+    return TRUE;
+}
+
+static int set_aside(swap *w, const char *path)
+{
+    char *to = CPLStrdup(
+        CPLFormFilename(w->olddir, CPLSPrintf("%d", CSLCount(w->old)), NULL));
+    const int ok = do_rename(w, path, to);
+    if (ok)
+    {
+        w->old = CSLAddString(w->old, path);
+        w->saved = CSLAddString(w->saved, to);
+    }
+    CPLFree(to);
+    return ok;
+}
+
+/* With -overwrite, every file of the old dataset at `target` (a file, not a
+ * folder) is set aside, so that none of its side files (a .qix, .cpg,
+ * -wal) outlives it next to the new one. */
+static int set_aside_dataset(swap *w, const char *target)
+{
+    VSIStatBufL sb;
+    if (VSIStatL(target, &sb) != 0 || VSI_ISDIR(sb.st_mode))
+        return TRUE;
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    GDALDatasetH ds = GDALOpenEx(target, GDAL_OF_VECTOR, NULL, NULL, NULL);
+    CPLPopErrorHandler();
+    char **files = ds ? GDALGetFileList(ds) : NULL;
+    if (ds)
+        GDALClose(ds);
+    if (!files)
+        files = CSLAddString(NULL, target);
+    int ok = TRUE;
+    for (char **f = files; ok && *f; f++)
+        if (VSIStatL(*f, &sb) == 0 && !VSI_ISDIR(sb.st_mode))
+            ok = set_aside(w, *f);
+    CSLDestroy(files);
+    return ok;
+}
+
+/* Walks folder `from` into folder `to`. With w NULL it only checks: FALSE
+ * (after a CPLError) when an entry would replace one without `overwrite`,
+ * or a file by a folder or the reverse. With w it moves: files replace
+ * files of the same name (set aside first), folders are merged entry by
+ * entry, so an existing destination folder loses only what this run
+ * rewrites. */
+static int move_into_place(swap *w, const char *from, const char *to,
+                           int overwrite)
 {
     char **entries = VSIReadDir(from);
     int ok = TRUE;
@@ -126,15 +223,16 @@ static int move_into_place(const char *from, const char *to, int overwrite)
         VSIStatBufL ss, ds;
         const int src_dir = VSIStatL(src, &ss) == 0 && VSI_ISDIR(ss.st_mode);
         const int exists = VSIStatL(dst, &ds) == 0;
-        if (exists && !overwrite)
+        const int dst_dir = exists && VSI_ISDIR(ds.st_mode);
+        if (!w && exists && !overwrite)
         {
             CPLError(CE_Failure, CPLE_FileIO,
                      "gdal_watermesh: %s already exists; use -overwrite.", dst);
             ok = FALSE;
         }
-        else if (exists && src_dir && VSI_ISDIR(ds.st_mode))
-            ok = move_into_place(src, dst, overwrite);
-        else if (exists && src_dir != (VSI_ISDIR(ds.st_mode) != 0))
+        else if (src_dir && dst_dir)
+            ok = move_into_place(w, src, dst, overwrite);
+        else if (!w && exists && src_dir != dst_dir)
         {
             CPLError(CE_Failure, CPLE_FileIO,
                      "gdal_watermesh: cannot replace %s: one of the old and "
@@ -142,11 +240,11 @@ static int move_into_place(const char *from, const char *to, int overwrite)
                      dst);
             ok = FALSE;
         }
-        else if (VSIRename(src, dst) != 0)
+        else if (w)
         {
-            CPLError(CE_Failure, CPLE_FileIO,
-                     "gdal_watermesh: cannot move %s to %s.", src, dst);
-            ok = FALSE;
+            ok = (!exists || set_aside(w, dst)) && do_rename(w, src, dst);
+            if (ok)
+                w->placed = CSLAddString(w->placed, dst);
         }
         CPLFree(src);
         CPLFree(dst);
@@ -155,16 +253,61 @@ static int move_into_place(const char *from, const char *to, int overwrite)
     return ok;
 }
 
-/* Writes the scene into a new dataset at `path`; FALSE after a CPLError. */
+/* Removes what was placed and renames the old files back. */
+static void undo(swap *w)
+{
+    CPLPushErrorHandler(CPLQuietErrorHandler);
+    for (int i = CSLCount(w->placed) - 1; i >= 0; i--)
+    {
+        VSIStatBufL sb;
+        if (VSIStatL(w->placed[i], &sb) == 0 && VSI_ISDIR(sb.st_mode))
+            VSIRmdirRecursive(w->placed[i]);
+        else
+            VSIUnlink(w->placed[i]);
+    }
+    for (int i = CSLCount(w->old) - 1; i >= 0; i--)
+        VSIRename(w->saved[i], w->old[i]);
+    CPLPopErrorHandler();
+}
+
+/* Moves the run's output (folder newdir) into dstdir, replacing the
+ * targets' old files with -overwrite; all or nothing. */
+static int put_in_place(const char *newdir, const char *olddir,
+                        const char *dstdir, const char *const targets[2],
+                        int overwrite)
+{
+    if (!move_into_place(NULL, newdir, dstdir, overwrite))
+        return FALSE;
+    swap w = {olddir, NULL, NULL, NULL, 0, 0};
+    w.fail_at =
+        atoi(CPLGetConfigOption("GDAL_WATERMESH_TEST_RENAME_FAILURE", "0"));
+    int ok = VSIMkdir(olddir, 0755) == 0;
+    for (int t = 0; ok && overwrite && t < 2 && targets[t]; t++)
+        ok = set_aside_dataset(&w, targets[t]);
+    ok = ok && move_into_place(&w, newdir, dstdir, overwrite);
+    if (!ok)
+        undo(&w);
+    CSLDestroy(w.placed);
+    CSLDestroy(w.old);
+    CSLDestroy(w.saved);
+    return ok;
+}
+
+/* Writes the scene: both layers into a new dataset at `path`, or, when
+ * mesh_path is set, the water layer to `path` and the mesh layer to
+ * mesh_path; FALSE after a CPLError. */
 static int write_output(const WMScene *scene, GDALDriverH drv, const char *path,
-                        char **lco, char **dsco, int show_progress)
+                        const char *mesh_path, char **lco, char **dsco,
+                        int show_progress)
 {
     GDALDatasetH out = GDALCreate(drv, path, 0, 0, 0, GDT_Unknown, dsco);
-    if (!out)
-        return FALSE;
-    OGRLayerH lw =
-        make_layer(out, "water", wkbPolygon, scene->hSRS, lco, "area", OFTReal);
-    OGRLayerH lm = lw ? make_layer(out, "mesh", wkbMultiPolygon, scene->hSRS,
+    GDALDatasetH mout = out && mesh_path ? GDALCreate(drv, mesh_path, 0, 0, 0,
+                                                      GDT_Unknown, dsco)
+                                         : out;
+    OGRLayerH lw = out && mout ? make_layer(out, "water", wkbPolygon,
+                                            scene->hSRS, lco, "area", OFTReal)
+                               : NULL;
+    OGRLayerH lm = lw ? make_layer(mout, "mesh", wkbMultiPolygon, scene->hSRS,
                                    lco, "triangles", OFTInteger)
                       : NULL;
     int ok = lw && lm;
@@ -184,12 +327,20 @@ static int write_output(const WMScene *scene, GDALDriverH drv, const char *path,
         if (ok && tx)
             ok = GDALDatasetCommitTransaction(out) == OGRERR_NONE;
     }
-    if (!ok)
-        CPLPushErrorHandler(CPLQuietErrorHandler); /* closing a discarded
-                                                      output */
-    GDALClose(out);
-    if (!ok)
+    /* closing a discarded output is quiet; closing a good one flushes it,
+     * and a write that fails there (a full disk) fails the run */
+    const int discarded = !ok;
+    if (discarded)
+        CPLPushErrorHandler(CPLQuietErrorHandler);
+    CPLErrorReset();
+    if (mout && mout != out)
+        GDALClose(mout);
+    if (out)
+        GDALClose(out);
+    if (discarded)
         CPLPopErrorHandler();
+    else if (CPLGetLastErrorType() >= CE_Failure)
+        ok = FALSE;
     return ok;
 }
 
@@ -218,6 +369,7 @@ int main(int argc, char **argv)
 
     char **opts = NULL, **lco = NULL, **dsco = NULL;
     const char *format = NULL, *descriptor = NULL, *dst = NULL;
+    char *water_dst = NULL, *mesh_dst = NULL; /* what the run writes */
     int overwrite = FALSE, show_progress = FALSE, quiet = FALSE, stats = FALSE;
     int rc = 1;
 
@@ -309,15 +461,6 @@ int main(int argc, char **argv)
     if (stats)
         all = CSLSetNameValue(all, "STATS", "YES");
 
-    VSIStatBufL sb;
-    if (VSIStatL(dst, &sb) == 0 && !overwrite)
-    {
-        CPLError(CE_Failure, CPLE_AppDefined,
-                 "gdal_watermesh: %s already exists; use -overwrite to "
-                 "replace it.",
-                 dst);
-        goto end;
-    }
     GDALDriverH drv = format ? GDALGetDriverByName(format) : guess_driver(dst);
     if (!drv)
     {
@@ -325,6 +468,28 @@ int main(int argc, char **argv)
                  "gdal_watermesh: no vector driver %s%s.",
                  format ? "named " : "for ", format ? format : dst);
         goto end;
+    }
+    /* what the run writes: dst, or two files by the single-layer rule;
+     * any of them existing is refused before any work */
+    if (single_layer_file(drv, dst))
+    {
+        water_dst = layer_file(drv, dst, "water");
+        mesh_dst = layer_file(drv, dst, "mesh");
+    }
+    else
+        water_dst = CPLStrdup(dst);
+    const char *const targets[2] = {water_dst, mesh_dst};
+    for (int t = 0; t < 2 && targets[t]; t++)
+    {
+        VSIStatBufL sb;
+        if (VSIStatL(targets[t], &sb) == 0 && !overwrite)
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "gdal_watermesh: %s already exists; use -overwrite to "
+                     "replace it.",
+                     targets[t]);
+            goto end;
+        }
     }
 
     /* read and check every input before anything is created */
@@ -353,13 +518,23 @@ int main(int argc, char **argv)
     {
         signal(SIGINT, on_signal);
         signal(SIGTERM, on_signal);
-        char *tmpdst =
-            CPLStrdup(CPLFormFilename(tmpdir, CPLGetFilename(dst), NULL));
-        ok = write_output(scene, drv, tmpdst, lco, dsco,
-                          show_progress && !quiet);
-        CPLFree(tmpdst);
-        if (ok)
-            ok = move_into_place(tmpdir, dstdir, overwrite);
+        /* the output is written under tmpdir/new; the files it replaces
+         * wait in tmpdir/old until everything is in place */
+        char *newdir = CPLStrdup(CPLFormFilename(tmpdir, "new", NULL));
+        char *olddir = CPLStrdup(CPLFormFilename(tmpdir, "old", NULL));
+        char *tmpw =
+            CPLStrdup(CPLFormFilename(newdir, CPLGetFilename(water_dst), NULL));
+        char *tmpm = mesh_dst ? CPLStrdup(CPLFormFilename(
+                                    newdir, CPLGetFilename(mesh_dst), NULL))
+                              : NULL;
+        ok = VSIMkdir(newdir, 0755) == 0 &&
+             write_output(scene, drv, tmpw, tmpm, lco, dsco,
+                          show_progress && !quiet) &&
+             put_in_place(newdir, olddir, dstdir, targets, overwrite);
+        CPLFree(tmpw);
+        CPLFree(tmpm);
+        CPLFree(newdir);
+        CPLFree(olddir);
         VSIRmdirRecursive(tmpdir);
     }
     CPLFree(tmpdir);
@@ -369,6 +544,8 @@ int main(int argc, char **argv)
     if (!ok && g_interrupted)
         fprintf(stderr, "ERROR: interrupted; nothing written to %s.\n", dst);
 end:
+    CPLFree(water_dst);
+    CPLFree(mesh_dst);
     CSLDestroy(all);
     CSLDestroy(opts);
     CSLDestroy(lco);

@@ -186,6 +186,157 @@ def test_output_format_directory(wm, simple_options, simple_args, tmp_dir, fmt):
     assert abs(a - b) <= 1e-9 * b, (a, b)
 
 
+@pytest.mark.parametrize('fmt,ext', [('ESRI Shapefile', 'shp'), ('FlatGeobuf', 'fgb'),
+                                     ('GeoJSON', 'geojson')])
+def test_single_layer_format_writes_two_files(wm, simple_options, simple_args, tmp_dir, fmt, ext):
+    """A single-layer format named as a file: <name>_water.<ext> and
+    <name>_mesh.<ext>, nothing else (never a stray mesh.<ext> beside it)."""
+    out = os.path.join(tmp_dir, 'single')
+    os.mkdir(out)
+    ok(wm.cli(simple_args + [os.path.join(out, 'out.' + ext)]))
+    names = listing(out)
+    assert 'out_water.' + ext in names and 'out_mesh.' + ext in names, names
+    assert all(n.startswith(('out_water.', 'out_mesh.')) for n in names), names
+    ref = wm.run(simple_options)
+    for layer, want in (('water', ref.water), ('mesh', ref.mesh)):
+        ds = gdal.OpenEx(os.path.join(out, 'out_%s.%s' % (layer, ext)), gdal.OF_VECTOR)
+        assert ds.GetDriver().ShortName == fmt
+        assert ds.GetLayerCount() == 1
+        assert ds.GetLayer(0).GetFeatureCount() == len(want), layer
+
+
+def test_single_layer_existing_target_refused_before_work(wm, simple_args, tmp_dir):
+    out = os.path.join(tmp_dir, 'single')
+    os.mkdir(out)
+    with open(os.path.join(out, 'out_mesh.shp'), 'w') as f:
+        f.write('not ours')
+    p = failed(wm.cli(simple_args + ['-stats', os.path.join(out, 'out.shp')]))
+    assert 'out_mesh.shp' in p.stderr and '-overwrite' in p.stderr, p.stderr
+    assert 'total (wall)' not in p.stdout, 'the run started before refusing'
+    assert listing(out) == ['out_mesh.shp']
+
+
+def test_stray_sidecar_leaves_nothing(wm, simple_args, tmp_dir):
+    """Issue 13, item 7: a file of the output's set already there (here a
+    .dbf without its .shp) fails the run without -overwrite, and nothing of
+    the new output is moved beside it: every entry is checked before any
+    is moved."""
+    out = os.path.join(tmp_dir, 'single')
+    os.mkdir(out)
+    with open(os.path.join(out, 'out_mesh.dbf'), 'w') as f:
+        f.write('not ours')
+    p = failed(wm.cli(simple_args + [os.path.join(out, 'out.shp')]))
+    assert 'out_mesh.dbf' in p.stderr, p.stderr
+    assert listing(out) == ['out_mesh.dbf']
+    assert open(os.path.join(out, 'out_mesh.dbf')).read() == 'not ours'
+
+
+def test_overwrite_drops_old_side_files(wm, simple_args, tmp_dir):
+    """-overwrite replaces a whole old dataset: a spatial index (.qix) the
+    old Shapefile had does not outlive it next to the new one."""
+    out = os.path.join(tmp_dir, 'single')
+    os.mkdir(out)
+    dst = os.path.join(out, 'out.shp')
+    ok(wm.cli(simple_args + [dst]))
+    old = gdal.OpenEx(os.path.join(out, 'out_water.shp'), gdal.OF_VECTOR | gdal.OF_UPDATE)
+    old.ExecuteSQL('CREATE SPATIAL INDEX ON out_water')
+    old = None
+    assert 'out_water.qix' in listing(out)
+    ok(wm.cli(simple_args + ['-overwrite', '-width', '14', dst]))
+    names = listing(out)
+    assert 'out_water.qix' not in names, names
+    assert 'out_water.shp' in names and 'out_mesh.shp' in names, names
+
+
+@pytest.mark.parametrize('k', [1, 5, 8, 9, 12, 16])
+def test_failed_move_puts_everything_back(wm, simple_args, tmp_dir, k):
+    """A rename that fails while the new output is moved into place (the
+    k-th, made to fail by the test hook GDAL_WATERMESH_TEST_RENAME_FAILURE).
+    With -overwrite, renames 1-8 set the old files aside (4 per Shapefile)
+    and 9-16 move the new ones in. The files already moved are removed and
+    the old ones renamed back: the old output is left whole, and nothing of
+    the new one."""
+    out = os.path.join(tmp_dir, 'single%d' % k)
+    os.mkdir(out)
+    dst = os.path.join(out, 'out.shp')
+    ok(wm.cli(simple_args + [dst]))
+    before = {n: open(os.path.join(out, n), 'rb').read() for n in listing(out)}
+    p = failed(wm.cli(simple_args + ['-overwrite', '-width', '14', '--config',
+                                     'GDAL_WATERMESH_TEST_RENAME_FAILURE', str(k), dst]))
+    assert 'cannot move' in p.stderr, p.stderr
+    assert listing(out) == sorted(before), listing(out)
+    for n, data in before.items():
+        assert open(os.path.join(out, n), 'rb').read() == data, n
+
+
+def _tiny_disk(path, kib):
+    """A folder whose file system holds `kib` KiB: a tmpfs when this
+    process may mount one (root), else a folder under a file-size limit
+    (RLIMIT_FSIZE, applied to the child). Returns (preexec_fn, how)."""
+    import resource
+    import subprocess
+    os.mkdir(path)
+    if os.geteuid() == 0 and subprocess.run(
+            ['mount', '-t', 'tmpfs', '-o', 'size=%dk' % kib, 'tmpfs', path],
+            stderr=subprocess.DEVNULL).returncode == 0:
+        return None, 'tmpfs'
+
+    def limit():
+        import signal
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (kib << 10, kib << 10))
+    return limit, 'RLIMIT_FSIZE'
+
+
+def test_full_disk_leaves_nothing(wm, simple_args, tmp_dir):
+    """The destination's disk fills during the run (a 256 KiB tmpfs, or a
+    file-size limit where mounting is not allowed): a clear error naming
+    the write, exit 1, and nothing left at the destination or beside it."""
+    import subprocess
+    disk = os.path.join(tmp_dir, 'tiny')
+    pre, how = _tiny_disk(disk, 256)
+    try:
+        dst = os.path.join(disk, 'out.gpkg')
+        # 2.5 MB of output: the disk fills while features are written
+        args = [wm.CLI_PATH] + simple_args + ['-pixel_size', '0.25', '-simplify', '0', dst]
+        p = subprocess.run(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           universal_newlines=True, timeout=300, preexec_fn=pre)
+        assert p.returncode == 1, (how, p.returncode, p.stderr)
+        assert 'ERROR' in p.stderr, (how, p.stderr)
+        low = p.stderr.lower()
+        assert any(w in low for w in ('space', 'full', 'too large', 'write', 'disk')), (how, p.stderr)
+        assert os.listdir(disk) == [], (how, os.listdir(disk))
+    finally:
+        if how == 'tmpfs':
+            subprocess.run(['umount', disk])
+
+
+def test_read_only_destination(wm, simple_args, tmp_dir):
+    """A destination folder that cannot be written: a read-only bind mount
+    as root (for whom modes do not count), else mode 0555. A clear error
+    naming the folder, exit 1, nothing created."""
+    import subprocess
+    ro = os.path.join(tmp_dir, 'readonly')
+    os.mkdir(ro)
+    how = 'chmod 0555'
+    if os.geteuid() == 0:
+        assert subprocess.run(['mount', '--bind', ro, ro]).returncode == 0
+        assert subprocess.run(['mount', '-o', 'remount,ro,bind', ro]).returncode == 0
+        how = 'read-only bind mount'
+    else:
+        os.chmod(ro, 0o555)
+    try:
+        p = wm.cli(simple_args + [os.path.join(ro, 'out.gpkg')])
+        assert p.returncode == 1, (how, p.stderr)
+        assert 'ERROR' in p.stderr and ro in p.stderr, (how, p.stderr)
+        assert os.listdir(ro) == [], how
+    finally:
+        if how == 'chmod 0555':
+            os.chmod(ro, 0o755)
+        else:
+            subprocess.run(['umount', ro])
+
+
 def test_lco(wm, simple_args, tmp_dir):
     dst = os.path.join(tmp_dir, 'out.gpkg')
     ok(wm.cli(simple_args + ['-lco', 'FID=wm_fid', dst]))

@@ -137,6 +137,9 @@ static wm_status build_reach(wm_scene *s)
 {
     wm_rtree *t = &s->reach;
     const size_t n = s->nsegs + s->npolys;
+    free(t->box);
+    free(t->item);
+    memset(t, 0, sizeof *t);
     const size_t total = plan_levels(t, n);
     if (n == 0)
         return WM_OK;

@@ -1190,7 +1190,7 @@ static int hidden_cell(const wm_field *f, wm_probe *probe, const wm_hidden *h,
     /* the cell's seeds */
     const uint64_t key = cell_key(f, c, r);
     size_t lo = lower_u64(h->seedcell, h->nseed, key);
-    q.seed = h->seed + lo;
+    q.seed = h->seed ? h->seed + lo : NULL;
     while (lo < h->nseed && h->seedcell[lo] == key)
         lo++, q.nseed++;
     walker w = {probe, emit, user};

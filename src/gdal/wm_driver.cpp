@@ -427,7 +427,10 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
     }
     catch (const std::exception &e)
     {
+        /* the walk has moved on: the read stops rather than skip blocks */
         CPLError(CE_Failure, CPLE_AppDefined, "WATERMESH: %s", e.what());
+        m_aoChunk.clear();
+        m_bDone = true;
         return nullptr;
     }
 }

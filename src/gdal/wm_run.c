@@ -500,7 +500,7 @@ CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
             err = CE_Failure;
         else if (n > 0 || done == 0)
         {
-            /* one run even for an empty scene: progress reaches 1 */
+            /* one run even for an empty scene */
             void *scaled =
                 total ? GDALCreateScaledProgress(
                             (double)done / (double)total,
@@ -517,6 +517,11 @@ CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
     } while (err == CE_None && n == WM_RUN_BATCH);
     WMBlockWalkEnd(&w);
     VSIFree(batch);
+    if (err == CE_None && pfn && !pfn(1.0, "", pArg))
+    {
+        CPLError(CE_Failure, CPLE_UserInterrupt, "User terminated");
+        err = CE_Failure;
+    }
     if (err == CE_None && s->params.stats)
         WMPrintStats(s, &all);
     return err;
