@@ -257,6 +257,49 @@ def test_default_layer_is_first(wm, simple_options, simple_scene):
     assert a.signature() == b.signature()
 
 
+def test_default_layers_by_geometry_type(wm, simple_options, simple_scene, tmp_dir):
+    """RIVERS and LAKES naming one file with no *_LAYER: rivers take the
+    first layer of lines, lakes the first of polygons, even when a polygon
+    layer comes first (issue 15: it was "LAKES layer 'rivers' has Line
+    String geometries")."""
+    src = os.path.join(tmp_dir, 'lakes_first.gpkg')
+    inp = ogr.Open(simple_scene)
+    out = ogr.GetDriverByName('GPKG').CreateDataSource(src)
+    for name in ('ponds', 'lakes', 'rivers', 'rivers2'):
+        out.CopyLayer(inp.GetLayerByName(name), name)
+    out = inp = None
+    gdal.SetConfigOption('CPL_DEBUG', 'ON')
+    try:
+        got, cap = wm.open({'RIVERS': src, 'LAKES': src, 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512})
+    finally:
+        gdal.SetConfigOption('CPL_DEBUG', None)
+    assert got is not None, cap.text
+    assert "layer 'rivers', the first of lines" in cap.text, cap.text
+    assert "layer 'ponds', the first of polygons" in cap.text, cap.text
+    got = None
+    a = wm.run({'RIVERS': src, 'LAKES': src, 'PIXEL_SIZE': 1, 'BLOCK_SIZE': 512})
+    b = wm.run(with_(simple_options, LAKES_LAYER='ponds'))
+    assert a.signature() == b.signature()
+
+
+def test_layer_extent_is_the_waters(wm, simple_options):
+    """GetExtent is the water's box (the capsules' and lakes' boxes, grown
+    by a pixel), not the block grid's: it holds every feature and lies
+    within two pixels of their envelope."""
+    ds, cap = wm.open(simple_options)
+    for name in ('water', 'mesh'):
+        lyr = ds.GetLayerByName(name)
+        ext = lyr.GetExtent()
+        env = [math.inf, -math.inf, math.inf, -math.inf]
+        for f in lyr:
+            e = f.GetGeometryRef().GetEnvelope()
+            env = [min(env[0], e[0]), max(env[1], e[1]), min(env[2], e[2]), max(env[3], e[3])]
+        px = float(simple_options['PIXEL_SIZE'])
+        assert ext[0] <= env[0] and ext[2] <= env[2], (name, ext, env)
+        assert ext[1] >= env[1] and ext[3] >= env[3], (name, ext, env)
+        assert all(abs(a - b) <= 2 * px for a, b in zip(ext, env)), (name, ext, env)
+
+
 def test_rivers_only(wm, simple_options):
     o = with_(simple_options, LAKES=None, LAKES_LAYER=None)
     assert_area_close(wm, wm.run(o), o)

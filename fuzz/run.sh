@@ -28,7 +28,9 @@ for f in "$src"/src/core/*.c "$src"/src/gdal/wm_options.c \
   "$src"/src/gdal/wm_ingest.c "$src"/src/gdal/wm_device.c \
   "$src"/src/gdal/wm_run.c "$src"/src/cl/wm_cl_none.c; do
   o="$out/obj/$(basename "$f" .c).o"
-  if [ ! -f "$o" ] || [ "$f" -nt "$o" ]; then
+  # rebuilt when its source or any header is newer
+  if [ ! -f "$o" ] || [ "$f" -nt "$o" ] ||
+    [ -n "$(find "$src/src" "$src/fuzz" -name '*.h' -newer "$o" | head -1)" ]; then
     # shellcheck disable=SC2086
     $cc $cflags -fsanitize=fuzzer-no-link -c "$f" -o "$o"
   fi

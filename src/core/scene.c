@@ -338,7 +338,8 @@ wm_status wm_scene_index(wm_scene *s, const wm_ctx *ctx)
         }
         s->poly_box[p] = b;
     }
-    /* extent of everything, grown by reach */
+    /* extent of everything, grown by reach; and of the water itself (each
+     * capsule's box is its segment's grown by its radius) */
     int have = 0;
     wm_box all = {0, 0, 0, 0};
     s->max_r = 0;
@@ -348,19 +349,13 @@ wm_status wm_scene_index(wm_scene *s, const wm_ctx *ctx)
     const int64_t grow = (int64_t)ceil(s->max_r) + (int64_t)s->band * WM_Q + 1;
     for (size_t i = 0; i < s->nsegs + s->npolys; i++)
     {
-        wm_box b =
+        const wm_box b =
             i < s->nsegs ? seg_box(&s->segs[i]) : s->poly_box[i - s->nsegs];
-        if (!have)
-            all = b;
+        const int64_t r = i < s->nsegs ? (int64_t)ceil(s->segs[i].r) : 0;
+        const wm_box w = {b.x0 - r, b.y0 - r, b.x1 + r, b.y1 + r};
+        all = have ? box_union(all, &b) : b;
+        s->water = have ? box_union(s->water, &w) : w;
         have = 1;
-        if (b.x0 < all.x0)
-            all.x0 = b.x0;
-        if (b.y0 < all.y0)
-            all.y0 = b.y0;
-        if (b.x1 > all.x1)
-            all.x1 = b.x1;
-        if (b.y1 > all.y1)
-            all.y1 = b.y1;
     }
     if (!have)
     {

@@ -94,6 +94,8 @@ extern "C"
         /* block grid covering everything within reach of the input */
         int64_t bx0, by0; /**< first block index */
         int64_t nbx, nby; /**< number of blocks */
+        wm_box water;     /**< box of the water (the capsules and polygons),
+                             global lattice; valid when nbx > 0 */
         /** which blocks each item (river segments, then lake polygons)
          *  reaches, as a block range, in a packed R-tree: building and
          *  memory grow with the input, never with the grid's area */

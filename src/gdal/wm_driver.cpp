@@ -474,14 +474,18 @@ GIntBig WaterMeshLayer::GetFeatureCount(int bForce)
 
 OGRErr WaterMeshLayer::GetExtent(OGREnvelope *psExtent, int)
 {
+    /* the water's box (the capsules' and polygons', not the block grid,
+     * which reaches the clamp band beyond them), grown by a pixel: sampled
+     * crossings lie within that of the exact boundary */
     const wm_scene &c = m_poDS->m_poScene->core;
     if (c.nbx == 0)
         return OGRERR_FAILURE;
-    const double bs = m_poDS->m_poScene->params.block;
-    psExtent->MinX = static_cast<double>(c.bx0) * bs;
-    psExtent->MinY = static_cast<double>(c.by0) * bs;
-    psExtent->MaxX = static_cast<double>(c.bx0 + c.nbx) * bs;
-    psExtent->MaxY = static_cast<double>(c.by0 + c.nby) * bs;
+    const double u = m_poDS->m_poScene->unit;
+    const int64_t px = WM_Q;
+    psExtent->MinX = static_cast<double>(c.water.x0 - px) * u;
+    psExtent->MinY = static_cast<double>(c.water.y0 - px) * u;
+    psExtent->MaxX = static_cast<double>(c.water.x1 + px) * u;
+    psExtent->MaxY = static_cast<double>(c.water.y1 + px) * u;
     return OGRERR_NONE;
 }
 
@@ -659,24 +663,26 @@ static const char OPEN_OPTIONS[] =
     "  <Option name='RIVERS' type='string' description='River centerlines "
     "datasource (lines)'/>"
     "  <Option name='RIVERS_LAYER' type='string' description='Rivers layer "
-    "name (default: first layer)'/>"
+    "name (default: the first layer of lines)'/>"
     "  <Option name='RIVERS_WHERE' type='string' description='Attribute "
     "filter on rivers'/>"
     "  <Option name='LAKES' type='string' description='Lakes datasource "
     "(polygons)'/>"
     "  <Option name='LAKES_LAYER' type='string' description='Lakes layer "
-    "name (default: first layer)'/>"
+    "name (default: the first layer of polygons)'/>"
     "  <Option name='LAKES_WHERE' type='string' description='Attribute "
     "filter on lakes'/>"
-    "  <Option name='WIDTH' type='float' default='10' description='Default "
-    "river width in metres'/>"
+    "  <Option name='WIDTH' type='float' default='10' min='0' max='100000' "
+    "description='Default river width in metres (positive)'/>"
     "  <Option name='WIDTH_FIELD' type='string' description='River field "
     "holding the width (number, or text such as \"2.5 m\")'/>"
-    "  <Option name='PIXEL_SIZE' type='float' default='0.5' "
-    "description='Sample spacing in metres'/>"
-    "  <Option name='BLOCK_SIZE' type='float' default='4096' "
-    "description='Block side in metres, a multiple of PIXEL_SIZE'/>"
-    "  <Option name='SIMPLIFY' type='float' description='Douglas-Peucker "
+    "  <Option name='PIXEL_SIZE' type='float' default='0.5' min='0' "
+    "description='Sample spacing in metres (positive)'/>"
+    "  <Option name='BLOCK_SIZE' type='float' default='4096' min='0' "
+    "description='Block side in metres, a multiple of PIXEL_SIZE from 2 to "
+    "65536 times it'/>"
+    "  <Option name='SIMPLIFY' type='float' min='0' "
+    "description='Douglas-Peucker "
     "tolerance in metres (default PIXEL_SIZE, 0 disables)'/>"
     "  <Option name='METHOD' type='string-select' default='CONTOUR' "
     "description='Boundary extraction: CONTOUR (marching squares) or PAPER "
@@ -688,7 +694,7 @@ static const char OPEN_OPTIONS[] =
     "    <Value>CLOSEST</Value><Value>DIRECTIONAL_CW</Value>"
     "<Value>DIRECTIONAL_CCW</Value><Value>LEAST_ANGLE</Value>"
     "  </Option>"
-    "  <Option name='MERGE_DISTANCE' type='float' default='0' "
+    "  <Option name='MERGE_DISTANCE' type='float' default='0' min='0' "
     "description='Merge ring vertices closer than this (metres; 0: off)'/>"
     "  <Option name='MIN_FEATURE_AREA' type='float' default='0' min='0' "
     "description='Drop land holes and water parts of a block smaller than "
@@ -699,7 +705,8 @@ static const char OPEN_OPTIONS[] =
     "    <Value>AUTO</Value><Value>CPU</Value><Value>OPENCL</Value>"
     "  </Option>"
     "  <Option name='NUM_THREADS' type='string' default='ALL_CPUS' "
-    "description='Number of threads, or ALL_CPUS'/>"
+    "description='Number of threads: an integer from 1 to 1024, or "
+    "ALL_CPUS'/>"
     "  <Option name='TARGET_SRS' type='string' description='Working CRS "
     "(projected, metres)'/>"
     "</OpenOptionList>";

@@ -257,6 +257,35 @@ static char *filter_error(OGRLayerH h, const char *where)
 }
 
 /* Opens one role's datasource and layer, sets its attribute filter. */
+/* The layer a role takes when *_LAYER is not set: the first whose geometry
+ * type is the role's (lines for RIVERS, polygons for LAKES), else the first
+ * layer (whose type ingestion then refuses, naming it). */
+static OGRLayerH default_layer(GDALDatasetH ds, const char *role)
+{
+    const int rivers = EQUAL(role, "RIVERS");
+    const int n = GDALDatasetGetLayerCount(ds);
+    for (int i = 0; i < n; i++)
+    {
+        OGRLayerH l = GDALDatasetGetLayer(ds, i);
+        const OGRwkbGeometryType t = wkbFlatten(OGR_L_GetGeomType(l));
+        const int fits = rivers ? OGR_GT_IsSubClassOf(t, wkbCurve) ||
+                                      OGR_GT_IsSubClassOf(t, wkbMultiCurve)
+                                : OGR_GT_IsSubClassOf(t, wkbCurvePolygon) ||
+                                      OGR_GT_IsSubClassOf(t, wkbMultiSurface);
+        if (fits)
+        {
+            CPLDebug("WATERMESH", "%s: layer '%s', the first of %s", role,
+                     OGR_L_GetName(l), rivers ? "lines" : "polygons");
+            return l;
+        }
+    }
+    if (n > 0)
+        CPLDebug("WATERMESH", "%s: no layer of %s; the first, '%s'", role,
+                 rivers ? "lines" : "polygons",
+                 OGR_L_GetName(GDALDatasetGetLayer(ds, 0)));
+    return n > 0 ? GDALDatasetGetLayer(ds, 0) : NULL;
+}
+
 static int open_role(CSLConstList opts, const char *role, GDALDatasetH *phDS,
                      OGRLayerH *phLayer)
 {
@@ -278,8 +307,8 @@ static int open_role(CSLConstList opts, const char *role, GDALDatasetH *phDS,
     const char *lname = CSLFetchNameValue(opts, key);
     if (lname && *lname)
         *phLayer = GDALDatasetGetLayerByName(*phDS, lname);
-    else if (GDALDatasetGetLayerCount(*phDS) > 0)
-        *phLayer = GDALDatasetGetLayer(*phDS, 0);
+    else
+        *phLayer = default_layer(*phDS, role);
     if (!*phLayer)
     {
         if (lname && *lname)
