@@ -40,6 +40,7 @@ static void usage(int code)
         "       [-merge_distance <m>] [-min_feature_area <m2>]\n"
         "       [-device AUTO|CPU|OPENCL] [-num_threads <n>|ALL_CPUS]\n"
         "       [-target_srs <srs>] [-spat <xmin> <ymin> <xmax> <ymax>]\n"
+        "       [-mesh_geometry MULTIPOLYGON|TIN]\n"
         "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco "
         "<NAME>=<VALUE>]...\n"
         "       [-overwrite] [-progress|-q] [-stats]\n"
@@ -307,7 +308,7 @@ static int write_output(const WMScene *scene, GDALDriverH drv, const char *path,
     OGRLayerH lw = out && mout ? make_layer(out, "water", wkbPolygon,
                                             scene->hSRS, lco, "area", OFTReal)
                                : NULL;
-    OGRLayerH lm = lw ? make_layer(mout, "mesh", wkbMultiPolygon, scene->hSRS,
+    OGRLayerH lm = lw ? make_layer(mout, "mesh", WMMeshType(scene), scene->hSRS,
                                    lco, "triangles", OFTInteger)
                       : NULL;
     int ok = lw && lm;

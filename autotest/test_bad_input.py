@@ -114,7 +114,8 @@ def test_pixel_size_not_positive(wm, simple_options, value):
 @pytest.mark.parametrize('option,value', [('METHOD', 'MARCHING'), ('HEURISTIC', 'RANDOM'),
                                           ('MERGE_DISTANCE', '-1'), ('MERGE_DISTANCE', 'far'),
                                           ('MIN_FEATURE_AREA', '-1'),
-                                          ('MIN_FEATURE_AREA', 'tiny')])
+                                          ('MIN_FEATURE_AREA', 'tiny'),
+                                          ('MESH_GEOMETRY', 'TRIANGLE_SOUP')])
 def test_method_options_refused(wm, simple_options, option, value):
     assert_refused(wm, dict(simple_options, **{option: value}), all_of=[option, value])
 

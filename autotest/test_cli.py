@@ -337,6 +337,45 @@ def test_read_only_destination(wm, simple_args, tmp_dir):
             subprocess.run(['umount', ro])
 
 
+def _leaf_triangles(g):
+    """The triangles of a TIN, or of what GDAL reads a MultiPatch back as (a
+    GeometryCollection of a TIN and a MultiPolygon of triangles); each leaf
+    must be a closed ring of 3 corners."""
+    name = g.GetGeometryName()
+    if name in ('TRIANGLE', 'POLYGON'):
+        ring = g.GetGeometryRef(0)
+        assert g.GetGeometryCount() == 1 and ring.GetPointCount() == 4, g.ExportToWkt()[:200]
+        return 1
+    assert name in ('TIN', 'MULTIPOLYGON', 'GEOMETRYCOLLECTION'), name
+    return sum(_leaf_triangles(g.GetGeometryRef(i)) for i in range(g.GetGeometryCount()))
+
+
+@pytest.mark.parametrize('ext,mesh_file', [('gpkg', 'out.gpkg'), ('fgb', 'out_mesh.fgb'),
+                                           ('shp', 'out_mesh.shp')])
+def test_mesh_geometry_tin_reads_back(wm, simple_options, simple_args, tmp_dir, ext, mesh_file):
+    """-mesh_geometry TIN to GeoPackage, FlatGeobuf and Shapefile (a
+    MultiPatch): every feature reads back with every triangle, as a TIN
+    (GeoPackage, FlatGeobuf) or as GDAL reads a MultiPatch."""
+    out = os.path.join(tmp_dir, 'tin_' + ext)
+    os.mkdir(out)
+    p = wm.cli(simple_args + ['-mesh_geometry', 'TIN', os.path.join(out, 'out.' + ext)])
+    assert p.returncode == 0, p.stderr
+    ds = gdal.OpenEx(os.path.join(out, mesh_file), gdal.OF_VECTOR)
+    lyr = ds.GetLayerByName('mesh') if ext == 'gpkg' else ds.GetLayer(0)
+    ref = wm.run(simple_options).mesh
+    want = sum(f.fields['triangles'] for f in ref)
+    got = 0
+    for f in lyr:
+        g = f.GetGeometryRef()
+        if ext != 'shp':
+            assert ogr.GT_Flatten(g.GetGeometryType()) == ogr.wkbTIN, g.GetGeometryName()
+        n = _leaf_triangles(g)
+        assert n == f['triangles']
+        got += n
+    assert lyr.GetFeatureCount() == len(ref)
+    assert got == want > 0
+
+
 def test_lco(wm, simple_args, tmp_dir):
     dst = os.path.join(tmp_dir, 'out.gpkg')
     ok(wm.cli(simple_args + ['-lco', 'FID=wm_fid', dst]))

@@ -11,12 +11,14 @@ import pytest
 from osgeo import gdal, ogr, osr
 
 import oracle
+from shapely.geometry import Polygon
+from shapely.ops import unary_union
 import scenes
 
 ALL_OPTIONS = ('RIVERS', 'RIVERS_LAYER', 'RIVERS_WHERE', 'LAKES', 'LAKES_LAYER',
                'LAKES_WHERE', 'WIDTH', 'WIDTH_FIELD', 'PIXEL_SIZE', 'BLOCK_SIZE',
                'SIMPLIFY', 'METHOD', 'HEURISTIC', 'MERGE_DISTANCE', 'DEVICE',
-               'NUM_THREADS', 'TARGET_SRS', 'MIN_FEATURE_AREA')
+               'NUM_THREADS', 'TARGET_SRS', 'MIN_FEATURE_AREA', 'MESH_GEOMETRY')
 
 AREA_REL_TOL = 0.01  # driver water area vs oracle on the small hand-made scene
 
@@ -123,6 +125,40 @@ def test_mesh_layer_schema(wm, simple_options):
     assert ft.get('block_x') == ogr.OFTInteger, ft
     assert ft.get('block_y') == ogr.OFTInteger, ft
     assert ft.get('triangles') == ogr.OFTInteger, ft
+
+
+def _triangles(g):
+    """Sorted triangles (each its sorted corners) of a MultiPolygon or TIN."""
+    out = []
+    for i in range(g.GetGeometryCount()):
+        ring = g.GetGeometryRef(i).GetGeometryRef(0)
+        out.append(tuple(sorted((round(ring.GetX(k), 6), round(ring.GetY(k), 6))
+                                for k in range(3))))
+    return sorted(out)
+
+
+def test_mesh_geometry_tin(wm, simple_options):
+    """MESH_GEOMETRY=TIN: the mesh layer is of TINs with the same triangles
+    as the default MultiPolygon, feature for feature; each TIN is a valid
+    surface: triangles that overlap nowhere (the area of their union is
+    the sum of theirs). GDAL's IsValid on a TIN needs SFCGAL."""
+    ds, cap = wm.open(with_(simple_options, MESH_GEOMETRY='TIN'))
+    assert ds is not None, cap.text
+    tin = ds.GetLayerByName('mesh')
+    assert ogr.GT_Flatten(tin.GetGeomType()) == ogr.wkbTIN, ogr.GeometryTypeToName(tin.GetGeomType())
+    ref_ds, _ = wm.open(simple_options)
+    a, b = [f for f in tin], [f for f in ref_ds.GetLayerByName('mesh')]
+    assert len(a) == len(b) > 0
+    for fa, fb in zip(a, b):
+        ga, gb = fa.GetGeometryRef(), fb.GetGeometryRef()
+        assert ogr.GT_Flatten(ga.GetGeometryType()) == ogr.wkbTIN
+        assert ga.GetGeometryCount() == fa['triangles'] == gb.GetGeometryCount()
+        assert _triangles(ga) == _triangles(gb)
+        tris = [Polygon(ga.GetGeometryRef(i).GetGeometryRef(0).GetPoints())
+                for i in range(ga.GetGeometryCount())]
+        assert all(t.is_valid and t.area > 0 for t in tris)
+        total = sum(t.area for t in tris)
+        assert abs(unary_union(tris).area - total) <= 1e-9 * total
 
 
 def test_layer_srs_is_rivers_crs(wm, simple_options):

@@ -41,15 +41,16 @@ OGRSpatialReferenceH CPL_DLL WMGetWorkingSRS(OGRLayerH hRivers,
  * @param hWater   output layer for polygons (one feature per connected
  *                 polygon per block), or NULL; fields block_x, block_y,
  *                 area are set when the layer has them
- * @param hMesh    output layer for triangles (one MultiPolygon per polygon
- *                 per block), or NULL; fields block_x, block_y, triangles
- *                 are set when present
+ * @param hMesh    output layer for triangles (one MultiPolygon, or TIN
+ *                 under MESH_GEOMETRY=TIN, per polygon per block), or
+ *                 NULL; fields block_x, block_y, triangles are set when
+ *                 present
  * @param papszOptions WIDTH, WIDTH_FIELD, PIXEL_SIZE, BLOCK_SIZE, SIMPLIFY,
- *                 METHOD, HEURISTIC, MERGE_DISTANCE, DEVICE,
- *                 NUM_THREADS, TARGET_SRS (see the driver
- *                 documentation), SPAT=xmin,ymin,xmax,ymax (working CRS:
- *                 only blocks touching it), STATS=YES (print the per-stage
- *                 timing table to stdout)
+ *                 METHOD, HEURISTIC, MERGE_DISTANCE, MIN_FEATURE_AREA,
+ *                 MESH_GEOMETRY, DEVICE, NUM_THREADS, TARGET_SRS (see
+ *                 the driver documentation), SPAT=xmin,ymin,xmax,ymax
+ *                 (working CRS: only blocks touching it), STATS=YES
+ *                 (print the per-stage timing table to stdout)
  * @param pfnProgress progress callback or NULL; returning FALSE cancels
  * @param pProgressArg its argument
  * @return CE_None, or CE_Failure after a CPLError (CPLE_UserInterrupt on

@@ -334,7 +334,7 @@ WaterMeshLayer::WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh)
 {
     SetDescription(m_poDefn->GetName());
     m_poDefn->Reference();
-    m_poDefn->SetGeomType(bMesh ? wkbMultiPolygon : wkbPolygon);
+    m_poDefn->SetGeomType(bMesh ? WMMeshType(poDS->m_poScene) : wkbPolygon);
     m_poDefn->GetGeomFieldDefn(0)->SetSpatialRef(
         OGRSpatialReference::FromHandle(poDS->m_poScene->hSRS));
     OGRFieldDefn oBX("block_x", OFTInteger), oBY("block_y", OFTInteger);
@@ -709,6 +709,12 @@ static const char OPEN_OPTIONS[] =
     "ALL_CPUS'/>"
     "  <Option name='TARGET_SRS' type='string' description='Working CRS "
     "(projected, metres)'/>"
+    "  <Option name='MESH_GEOMETRY' type='string-select' "
+    "default='MULTIPOLYGON' description='Geometry of a mesh feature: "
+    "MULTIPOLYGON (its triangles, sharing edges: a set of triangles, not a "
+    "valid MultiPolygon) or TIN (a TIN of Triangles)'>"
+    "    <Value>MULTIPOLYGON</Value><Value>TIN</Value>"
+    "  </Option>"
     "</OpenOptionList>";
 
 extern "C" void CPL_DLL GDALRegister_WATERMESH();

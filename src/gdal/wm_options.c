@@ -16,13 +16,11 @@
 #include <string.h>
 
 const char *const WM_OPTION_NAMES[] = {
-    "RIVERS",      "RIVERS_LAYER",   "RIVERS_WHERE",
-    "LAKES",       "LAKES_LAYER",    "LAKES_WHERE",
-    "WIDTH",       "WIDTH_FIELD",    "PIXEL_SIZE",
-    "BLOCK_SIZE",  "SIMPLIFY",       "METHOD",
-    "HEURISTIC",   "MERGE_DISTANCE", "DEVICE",
-    "NUM_THREADS", "TARGET_SRS",     "MIN_FEATURE_AREA",
-    NULL};
+    "RIVERS",      "RIVERS_LAYER",     "RIVERS_WHERE",  "LAKES",
+    "LAKES_LAYER", "LAKES_WHERE",      "WIDTH",         "WIDTH_FIELD",
+    "PIXEL_SIZE",  "BLOCK_SIZE",       "SIMPLIFY",      "METHOD",
+    "HEURISTIC",   "MERGE_DISTANCE",   "DEVICE",        "NUM_THREADS",
+    "TARGET_SRS",  "MIN_FEATURE_AREA", "MESH_GEOMETRY", NULL};
 
 /* Parses a strictly numeric option value; CPLError on failure. */
 static int number(CSLConstList opts, const char *name, double def, double *out)
@@ -159,6 +157,18 @@ static int params_parse(CSLConstList opts, WMParams *p)
         CPLError(CE_Failure, CPLE_IllegalArg,
                  "WATERMESH: MIN_FEATURE_AREA=%g must be >= 0.",
                  p->min_feature_area);
+        return FALSE;
+    }
+    const char *g = CSLFetchNameValueDef(opts, "MESH_GEOMETRY", "MULTIPOLYGON");
+    if (EQUAL(g, "MULTIPOLYGON"))
+        p->mesh_tin = FALSE;
+    else if (EQUAL(g, "TIN"))
+        p->mesh_tin = TRUE;
+    else
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: MESH_GEOMETRY=%s: expected MULTIPOLYGON or TIN.",
+                 g);
         return FALSE;
     }
     const char *d = CSLFetchNameValueDef(opts, "DEVICE", "AUTO");

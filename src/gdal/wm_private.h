@@ -41,6 +41,7 @@ typedef struct
     int heuristic;           /* HEURISTIC, a wm_heuristic (METHOD=PAPER) */
     double merge;            /* MERGE_DISTANCE, m; 0: off */
     double min_feature_area; /* MIN_FEATURE_AREA, m^2; 0: off */
+    int mesh_tin;            /* MESH_GEOMETRY=TIN (else MULTIPOLYGON) */
     WMDeviceKind device;
     int num_threads;
     char *target_srs; /* or NULL */
@@ -172,6 +173,9 @@ OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
                                size_t p);
 OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
                             size_t p);
+/** The mesh layer's geometry type: wkbMultiPolygon, or wkbTIN under
+ *  MESH_GEOMETRY=TIN. */
+OGRwkbGeometryType WMMeshType(const WMScene *s);
 /** Polygon area in m^2 (exact lattice area, then scaled). */
 double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p);
 

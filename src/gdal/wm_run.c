@@ -342,13 +342,21 @@ OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
     return g;
 }
 
+OGRwkbGeometryType WMMeshType(const WMScene *s)
+{
+    return s->params.mesh_tin ? wkbTIN : wkbMultiPolygon;
+}
+
+/* Polygon p's triangles: a MultiPolygon of triangles sharing edges (not an
+ * OGC-valid MultiPolygon: a set of triangles), or a TIN of Triangles. */
 OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
                             size_t p)
 {
-    OGRGeometryH g = OGR_G_CreateGeometry(wkbMultiPolygon);
+    const int tin = s->params.mesh_tin;
+    OGRGeometryH g = OGR_G_CreateGeometry(tin ? wkbTIN : wkbMultiPolygon);
     for (size_t t = r->poly_tri[p]; t < r->poly_tri[p + 1]; t++)
     {
-        OGRGeometryH tri = OGR_G_CreateGeometry(wkbPolygon);
+        OGRGeometryH tri = OGR_G_CreateGeometry(tin ? wkbTriangle : wkbPolygon);
         OGRGeometryH ring = OGR_G_CreateGeometry(wkbLinearRing);
         OGR_G_SetPointCount(ring, 4); /* one allocation */
         for (int k = 0; k <= 3; k++)
