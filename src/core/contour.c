@@ -242,33 +242,6 @@ static size_t hash64(uint64_t k, size_t mask)
     return (size_t)k & mask;
 }
 
-/* Bit i set where the sample i of a tile row (WM_TILE + 1 values) is water
- * (<= 0), the rule cell() applies. The compares vectorize into bytes; eight
- * 0/1 bytes are gathered into eight bits by one multiplication (the
- * products' partial sums never carry). */
-static uint64_t water_bits(const float *row)
-{
-    enum
-    {
-        NB = (WM_TILE + 1 + 7) / 8 * 8
-    };
-    unsigned char b[NB];
-    for (int32_t i = 0; i <= WM_TILE; i++)
-        b[i] = row[i] <= 0;
-    for (int32_t i = WM_TILE + 1; i < NB; i++)
-        b[i] = 0;
-    uint64_t m = 0;
-    for (int32_t k = 0; k < NB / 8; k++)
-    {
-        uint64_t x = 0;
-        for (int j = 0; j < 8; j++)
-            x |= (uint64_t)b[8 * k + j] << (8 * j);
-        /* byte j (0/1) of x moves to bit 56 + j */
-        m |= ((x * UINT64_C(0x0102040810204080)) >> 56) << (8 * k);
-    }
-    return m;
-}
-
 /* The cell across side `side` of cell (c, r). */
 static const int32_t side_dc[4] = {0, 1, 0, -1}, side_dr[4] = {-1, 0, 1, 0};
 
@@ -391,11 +364,11 @@ static int tile_segments(state *s, const wm_field *f, size_t t, size_t *hc)
     cells_of_tile(s->hid.cell, s->hid.ncell, t, &hc[0], cmask);
     /* water bits of the tile's sample rows; a cell needs work only where
      * its four corner bits differ */
-    uint64_t below = water_bits(f->val[t]);
+    uint64_t below = wm_field_water_bits(f->val[t]);
     for (int32_t r = r0; r < r1; r++)
     {
         const float *row = f->val[t] + (r - r0) * (WM_TILE + 1);
-        const uint64_t above = water_bits(row + WM_TILE + 1);
+        const uint64_t above = wm_field_water_bits(row + WM_TILE + 1);
         uint64_t mixed =
             (below ^ (below >> 1)) | (above ^ (above >> 1)) | (below ^ above);
         mixed &= ((UINT64_C(1) << (c1 - c0)) - 1) & ~cmask[r - r0];

@@ -1025,6 +1025,19 @@ float wm_field_at(const wm_field *f, int32_t c, int32_t r)
     }
 }
 
+/* The compare and the shift by the lane's index vectorize (a compare, a
+ * variable shift, an OR reduction), where bytes gathered one by one did
+ * not; the row's last sample goes apart (WM_TILE bits fill a word). */
+_Static_assert(WM_TILE <= 32, "a tile row's bits are built in 32 bits");
+
+WM_CLONES uint64_t wm_field_water_bits(const float *row)
+{
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < WM_TILE; i++)
+        m |= (uint32_t)(row[i] <= 0) << i;
+    return m | (uint64_t)(row[WM_TILE] <= 0) << WM_TILE;
+}
+
 void wm_field_prefetch(const wm_field *f, int32_t c, int32_t r)
 {
     int32_t off;

@@ -113,6 +113,11 @@ extern "C"
     /** Value of window sample (c, r), 0 <= c < w, 0 <= r < h. */
     float wm_field_at(const wm_field *f, int32_t c, int32_t r);
 
+    /** Bit i set where row[i] <= 0 (water), i = 0 .. WM_TILE: one row of a
+     *  tile's samples as the bits that marching squares and the sub-pixel
+     *  screen test. */
+    uint64_t wm_field_water_bits(const float *row);
+
     /** Asks the cache for what wm_field_at(f, c, r) will read: a caller
      *  reading scattered samples issues it some samples ahead, so that the
      *  memory latencies overlap. */

@@ -208,36 +208,41 @@ static int search_edge(wm_hidden *h, const wm_field *f, wm_probe *probe,
     return add_edge_cells(h, f, c, r, vertical);
 }
 
-/* Bits of a tile row of samples (WM_TILE + 1 values): where |v| < 1 pixel
- * (an edge can be undecided only between two such samples), and where v is
- * water. The compares vectorize into bytes; eight 0/1 bytes are gathered
- * into eight bits by one multiplication (cf. contour.c). */
-WM_CLONES static void row_bits(const float *row, uint64_t *near,
-                               uint64_t *water)
+/* The bits of one row `a` of a tile's samples (WM_TILE + 1 values) that
+ * the screen tests: where v is water and where |v| < 1 pixel (an edge can
+ * be undecided or loose only between two such samples); per edge, where
+ * |va| + |vb| <= 1 pixel (undecided() may hold) and where it is below
+ * 1 - LOOSE (loose() may hold), for the horizontal edges of `a` (h1, h6)
+ * and the vertical edges from the row `p` below to `a` (v1, v6). Computed
+ * for all columns at once: a compare and a shift by the lane's index per
+ * bit vectorize, where a test per edge would not. */
+typedef struct
 {
-    enum
+    uint64_t water, near, h1, h6, v1, v6;
+} row_bits;
+
+WM_CLONES static void screen_bits(const float *a, const float *p, row_bits *m)
+{
+    uint32_t w = 0, nr = 0, h1 = 0, h6 = 0, v1 = 0, v6 = 0;
+    for (uint32_t i = 0; i < WM_TILE; i++)
     {
-        NB = (WM_TILE + 1 + 7) / 8 * 8
-    };
-    unsigned char bn[NB], bw[NB];
-    for (int32_t i = 0; i <= WM_TILE; i++)
-        bn[i] = (unsigned char)((row[i] < 1.0f) & (row[i] > -1.0f));
-    for (int32_t i = 0; i <= WM_TILE; i++)
-        bw[i] = row[i] <= 0;
-    for (int32_t i = WM_TILE + 1; i < NB; i++)
-        bn[i] = bw[i] = 0;
-    *near = *water = 0;
-    for (int32_t k = 0; k < NB / 8; k++)
-    {
-        uint64_t x = 0, y = 0;
-        for (int j = 0; j < 8; j++)
-        {
-            x |= (uint64_t)bn[8 * k + j] << (8 * j);
-            y |= (uint64_t)bw[8 * k + j] << (8 * j);
-        }
-        *near |= ((x * UINT64_C(0x0102040810204080)) >> 56) << (8 * k);
-        *water |= ((y * UINT64_C(0x0102040810204080)) >> 56) << (8 * k);
+        const float x = fabsf(a[i]);
+        const float hs = x + fabsf(a[i + 1]), vs = fabsf(p[i]) + x;
+        w |= (uint32_t)(a[i] <= 0) << i;
+        nr |= (uint32_t)(x < 1.0f) << i;
+        h1 |= (uint32_t)(hs <= 1.0f) << i;
+        h6 |= (uint32_t)(hs < 1.0f - LOOSE) << i;
+        v1 |= (uint32_t)(vs <= 1.0f) << i;
+        v6 |= (uint32_t)(vs < 1.0f - LOOSE) << i;
     }
+    /* the last column: no horizontal edge starts there */
+    const float x = fabsf(a[WM_TILE]), vs = fabsf(p[WM_TILE]) + x;
+    m->water = w | (uint64_t)(a[WM_TILE] <= 0) << WM_TILE;
+    m->near = nr | (uint64_t)(x < 1.0f) << WM_TILE;
+    m->h1 = h1;
+    m->h6 = h6;
+    m->v1 = v1 | (uint64_t)(vs <= 1.0f) << WM_TILE;
+    m->v6 = v6 | (uint64_t)(vs < 1.0f - LOOSE) << WM_TILE;
 }
 
 /* An edge of a tile's sample array, from the sample at a to a + along;
@@ -296,11 +301,10 @@ static void feasible_far(const edge_view *e, float *L, float *U)
 
 /* Whether an edge whose two samples are of one class cannot decide: some
  * part of it is feasible (with a margin of 1/1000 pixel for the float
- * values); with |va| + |vb| > 1 pixel it never is. */
+ * values). With |va| + |vb| > 1 pixel it never is: the screen's bits leave
+ * those out. */
 static int undecided(const edge_view *e)
 {
-    if (fabsf(e->a[0]) + fabsf(e->a[e->along]) > 1.0f)
-        return 0;
     float L, U;
     feasible_near(e, &L, &U);
     if (L > U + 0.001f)
@@ -313,12 +317,11 @@ static int undecided(const edge_view *e)
  * class may lie more than LOOSE pixel from where the boundary meets it. A
  * straight boundary leaves a short feasible part around the interpolated
  * point; a thin feature (the far side of a stream narrower than a pixel,
- * the land between two rivers) a long one. */
+ * the land between two rivers) a long one. With |va| + |vb| >= 1 - LOOSE
+ * it never does: the screen's bits leave those out. */
 static int loose(const edge_view *e)
 {
     const float va = fabsf(e->a[0]), vb = fabsf(e->a[e->along]);
-    if (va + vb >= 1.0f - LOOSE)
-        return 0;
     const float p = va / (va + vb); /* interpolated, pixels from a */
     float L, U;
     feasible_near(e, &L, &U);
@@ -490,31 +493,30 @@ static int add_tips(wm_hidden *h, const wm_field *f, wm_probe *probe,
     return 1;
 }
 
-/* Seeds corner p of the union's boundary (probe->corner), unless buried
- * under a third input (a floating-point choice: a seed only adds exact
- * work). When the four samples of its cell are of one class the cell is
- * ambiguous: the corner of an island smaller than a pixel that several
- * rivers enclose, or of a pond between banks, which no side of the cell
- * may cross. Otherwise the seed only steers the subdivision of a cell
- * ambiguous for other reasons to the corner (a wedge tip the straight
- * segment of a simple rectangle would cut); crease.c recovers the
- * corners of the other cells. */
-static int corner_seed(wm_hidden *h, const wm_field *f, wm_probe *probe,
-                       wm_pt p)
+/* Whether corner p of the union's boundary (probe->corner) lies under a
+ * third input, where it seeds nothing (a floating-point choice: a seed
+ * only adds exact work). */
+static int buried(wm_probe *probe, wm_pt p)
 {
-    if (wm_probe_distance(probe, p.x, p.y, 2.0) < -1.0)
-        return 1;
-    const int32_t c = p.x / WM_Q, r = p.y / WM_Q;
+    return wm_probe_distance(probe, p.x, p.y, 2.0) < -1.0;
+}
+
+/* Whether the four samples of cell (c, r) are of one class. */
+static int uniform_cell(const wm_field *f, int32_t c, int32_t r)
+{
     const int w = wm_field_at(f, c, r) <= 0;
-    const int uniform = (wm_field_at(f, c + 1, r) <= 0) == w &&
-                        (wm_field_at(f, c, r + 1) <= 0) == w &&
-                        (wm_field_at(f, c + 1, r + 1) <= 0) == w;
-    return add_seed(h, f, p.x, p.y, uniform);
+    return (wm_field_at(f, c + 1, r) <= 0) == w &&
+           (wm_field_at(f, c, r + 1) <= 0) == w &&
+           (wm_field_at(f, c + 1, r + 1) <= 0) == w;
 }
 
 /* Seeds the cells of the inputs smaller than two pixels: lake rings (the
  * runs of edges of a polygon that close) and river segments with their
- * radius, by their first point. */
+ * radius, by their first point; the tips of thin caps; and the corners of
+ * the union (probe->corner) in cells whose four samples are of one class,
+ * which are ambiguous: the corner of an island smaller than a pixel that
+ * several rivers enclose, or of a pond between banks, which no side of the
+ * cell may cross. */
 static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
     const wm_scene *s = probe->s;
@@ -557,9 +559,39 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
             return 0;
     }
     for (size_t i = 0; i < probe->ncorner; i++)
-        if (!corner_seed(h, f, probe, probe->corner[i]))
+    {
+        const wm_pt p = probe->corner[i];
+        if (uniform_cell(f, p.x / WM_Q, p.y / WM_Q) && !buried(probe, p) &&
+            !add_seed(h, f, p.x, p.y, 1))
             return 0;
-    /* by cell: (cell, index) pairs sorted, then both arrays permuted */
+    }
+    return 1;
+}
+
+/* Seeds the corners of the union in the cells ambiguous for other reasons
+ * (h->cell, sorted): there a seed steers the subdivision to the corner (a
+ * wedge tip the straight segment of a simple rectangle would cut);
+ * crease.c recovers the corners of the other cells, where a seed would
+ * not be read. */
+static int steer_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
+{
+    for (size_t i = 0; i < probe->ncorner; i++)
+    {
+        const wm_pt p = probe->corner[i];
+        const int32_t c = p.x / WM_Q, r = p.y / WM_Q;
+        const uint64_t key = cell_key(f, c, r);
+        const size_t k = lower_u64(h->cell, h->ncell, key);
+        if (k < h->ncell && h->cell[k] == key && !uniform_cell(f, c, r) &&
+            !buried(probe, p) && !add_seed(h, f, p.x, p.y, 0))
+            return 0;
+    }
+    return 1;
+}
+
+/* Sorts the seeds by cell: (cell, index) pairs sorted, then both arrays
+ * permuted. */
+static int sort_seeds(wm_hidden *h)
+{
     if (h->nseed < 2)
         return 1;
     seedkey *o = malloc(h->nseed * sizeof *o);
@@ -705,32 +737,38 @@ static int screen_tile(wm_hidden *h, const wm_field *f, wm_probe *probe,
     const int32_t ce = T->c1 == T->n ? T->c1 : T->c1 - 1;
     const uint64_t hcols = (UINT64_C(1) << (T->c1 - T->c0)) - 1;
     const uint64_t vcols = (UINT64_C(1) << (ce - T->c0 + 1)) - 1;
-    uint64_t near, water, near2 = 0, water2 = 0;
-    row_bits(T->v, &near, &water);
+    /* the rows and columns of edges on the block square */
+    const uint64_t vsq = (T->c0 == 0 ? 1 : 0) |
+                         (T->c1 == T->n ? UINT64_C(1) << (T->n - T->c0) : 0);
+    row_bits cur, up_row = {0, 0, 0, 0, 0, 0};
+    screen_bits(T->v, T->v, &cur); /* (its vertical bits are not used) */
     for (int32_t r = T->r0; r <= re; r++)
     {
         const int up = r < T->r1;
         if (up)
-            row_bits(T->v + (ptrdiff_t)(r - T->r0 + 1) * (WM_TILE + 1), &near2,
-                     &water2);
+            screen_bits(T->v + (ptrdiff_t)(r - T->r0 + 1) * (WM_TILE + 1),
+                        T->v + (ptrdiff_t)(r - T->r0) * (WM_TILE + 1), &up_row);
+        const uint64_t hsq = r == 0 || r == T->n ? ~UINT64_C(0) : 0;
         /* horizontal edges of row r, vertical ones up from it */
-        const uint64_t hn = near & (near >> 1) & hcols;
-        const uint64_t hx = water ^ (water >> 1);
-        const uint64_t vn = up ? near & near2 & vcols : 0;
-        const uint64_t vx = water ^ water2;
-        const uint64_t saddle = up ? hx & ~(water ^ (water2 >> 1)) &
-                                         ~((water >> 1) ^ water2) & hcols
+        const uint64_t hn = cur.near & (cur.near >> 1) & hcols;
+        const uint64_t hx = cur.water ^ (cur.water >> 1);
+        const uint64_t vn = up ? cur.near & up_row.near & vcols : 0;
+        const uint64_t vx = cur.water ^ up_row.water;
+        const uint64_t saddle = up ? hx & ~(cur.water ^ (up_row.water >> 1)) &
+                                         ~((cur.water >> 1) ^ up_row.water) &
+                                         hcols
                                    : 0;
-        if (!screen(h, f, probe, T, r, hn & ~hx, 0, 0) ||
-            !screen(h, f, probe, T, r, vn & ~vx, 1, 0) ||
-            !screen(h, f, probe, T, r, hn & hx, 0, 1) ||
-            !screen(h, f, probe, T, r, vn & vx, 1, 1))
-            return 0;
+        /* same class (kind 0) and differing (kind 1), along x and y */
+        const uint64_t edges[4] = {hn & ~hx & cur.h1, vn & ~vx & up_row.v1,
+                                   hn & hx & (cur.h6 | hsq),
+                                   vn & vx & (up_row.v6 | vsq)};
+        for (int k = 0; k < 4; k++)
+            if (edges[k] && !screen(h, f, probe, T, r, edges[k], k & 1, k >> 1))
+                return 0;
         for (uint64_t m = saddle; m; m &= m - 1)
             if (!add_cell(h, f, T->c0 + __builtin_ctzll(m), r))
                 return 0;
-        near = near2;
-        water = water2;
+        cur = up_row;
     }
     return 1;
 }
@@ -775,7 +813,7 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
         qsort(h->edge, h->nedge, sizeof *h->edge, cmp_edge);
     if (h->ncell > 1)
         qsort(h->cell, h->ncell, sizeof *h->cell, cmp_u64);
-    if (!link_cells(h, f))
+    if (!steer_seeds(h, f, probe) || !sort_seeds(h) || !link_cells(h, f))
         goto nomem;
     return WM_OK;
 nomem:
