@@ -203,6 +203,12 @@ int wm_contour_cell_edge(const wm_field *f, int32_t c, int32_t r, wm_pt *a,
 }
 
 /* Position along the square, counter-clockwise from (0,0). */
+/* Whether p lies on the sides of the block square [0, S]^2. */
+static int on_square(wm_pt p, int32_t S)
+{
+    return p.x == 0 || p.y == 0 || p.x == S || p.y == S;
+}
+
 static int64_t perim(wm_pt p, int32_t S)
 {
     if (p.y == 0)
@@ -486,14 +492,25 @@ wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
             h = (h + 1) & (hcap - 1);
         }
     }
-    /* chain starts: entries on the block square */
+    /* chain starts: entries on the block square (a chain that starts or
+     * ends inside the block is a linking fault, never closed along it) */
     for (size_t i = 0; i < s.nsegs; i++)
-        if (!(s.segs[i].flags & HAS_PRED))
+    {
+        const seg *g = &s.segs[i];
+        if ((!(g->flags & HAS_PRED) && !on_square(g->in_pt, S)) ||
+            (g->next == NO_SEG && !on_square(g->out_pt, S)))
         {
-            ent[nent].pos = perim(s.segs[i].in_pt, S);
+            st = wm_fail(ctx, WM_ERR_INTERNAL,
+                         "contour: a chain ends inside the block");
+            goto cleanup;
+        }
+        if (!(g->flags & HAS_PRED))
+        {
+            ent[nent].pos = perim(g->in_pt, S);
             ent[nent].seg = i;
             nent++;
         }
+    }
     qsort(ent, nent, sizeof *ent, cmp_entry);
 
     /* open chains, closed along the square */

@@ -1017,12 +1017,34 @@ static int emit_pair(walker *w, const rect *q, const xing *a, const xing *b)
     return w->emit(w->user, a->p, m) && w->emit(w->user, m, b->p);
 }
 
+/* Emits each out crossing of x[0 .. k) with the next one counter-clockwise
+ * (joined) or the previous one. */
+static int pair_all(walker *w, const rect *q, const xing *x, int k, int joined)
+{
+    for (int i = 0; i < k; i++)
+        if (x[i].out)
+        {
+            const int m = joined ? (i + 1) % k : (i + k - 1) % k;
+            if (!emit_pair(w, q, &x[i], &x[m]))
+                return 0;
+        }
+    return 1;
+}
+
 /* Pairs the crossings of a rectangle too small to divide: each out
  * crossing with the next in one counter-clockwise (the water corners
  * joined) or the previous (separated); the pairing with fewer pairs on one
- * side wins, the class of the centre decides a tie. */
+ * side wins, the class of the centre decides a tie. When all crossings lie
+ * on one side, the pairing in which no pair wraps around the rectangle
+ * wins: the wrapping pair's path, drawn one unit inside the side as
+ * emit_pair() draws it, would cross the others'. */
 static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
 {
+    int one_side = 1;
+    for (int i = 1; i < k; i++)
+        one_side &= x[i].side == x[0].side;
+    if (one_side)
+        return pair_all(w, q, x, k, !x[k - 1].out);
     int same[2] = {0, 0};
     for (int j = 0; j < 2; j++)
         for (int i = 0; i < k; i++)
@@ -1037,14 +1059,7 @@ static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
     else
         joined = wm_probe_distance(w->probe, (q->x0 + q->x1) / 2.0,
                                    (q->y0 + q->y1) / 2.0, WM_PROBE_REACH) <= 0;
-    for (int i = 0; i < k; i++)
-        if (x[i].out)
-        {
-            const int m = joined ? (i + 1) % k : (i + k - 1) % k;
-            if (!emit_pair(w, q, &x[i], &x[m]))
-                return 0;
-        }
-    return 1;
+    return pair_all(w, q, x, k, joined);
 }
 
 /* Crossings of the dividing segment from P (length L, along x or y) with
