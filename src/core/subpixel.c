@@ -1084,52 +1084,35 @@ static int split(walker *w, const rect *q, int vertical, int32_t at, int depth)
     int32_t *mid = malloc(MAXCROSS * sizeof *mid);
     if (!mid)
         return 0;
-    /* the sides the dividing segment starts and ends on, and the two
-     * sides it cuts */
-    const int s0 = vertical ? SB : SL, s1 = vertical ? ST : SR;
-    const int c0 = class_at(q, s0, at);
-    int c1 = class_at(q, s1, at);
-    const wm_pt P = vertical ? (wm_pt){at, q->y0} : (wm_pt){q->x0, at};
-    const int n = divide(
-        w, P, vertical, vertical ? q->y1 - q->y0 : q->x1 - q->x0, c0, &c1, mid);
+    /* by vertical, then part k (0: left of x = at or below y = at, 1:
+     * right of it or above): the sides the dividing segment starts and
+     * ends on, which it cuts; the corners of part k at its ends; the side
+     * of part k it becomes */
+    static const int cut[2][2] = {{SL, SR}, {SB, ST}};
+    static const int ends[2][2][2] = {{{3, 2}, {0, 1}}, {{1, 2}, {0, 3}}};
+    static const int made[2][2] = {{ST, SB}, {SR, SL}};
+    const int v = vertical != 0;
+    const int c0 = class_at(q, cut[v][0], at);
+    int c1 = class_at(q, cut[v][1], at);
+    const wm_pt P = v ? (wm_pt){at, q->y0} : (wm_pt){q->x0, at};
+    const int n =
+        divide(w, P, v, v ? q->y1 - q->y0 : q->x1 - q->x0, c0, &c1, mid);
     int ok = n >= 0;
     rect part[2];
     for (int k = 0; k < 2 && ok; k++)
     {
         rect *a = &part[k];
         *a = *q;
-        if (vertical)
-        {
-            /* k = 0: left of x = at, k = 1: right of it */
-            if (k == 0)
-                a->x1 = at;
-            else
-                a->x0 = at;
-            a->cls[k ? 0 : 1] = c0;
-            a->cls[k ? 3 : 2] = c1;
-            sub_side(q, SB, k ? at : q->x0, k ? q->x1 : at, &a->side[SB],
-                     &a->ns[SB]);
-            sub_side(q, ST, k ? at : q->x0, k ? q->x1 : at, &a->side[ST],
-                     &a->ns[ST]);
-            a->side[k ? SL : SR] = mid;
-            a->ns[k ? SL : SR] = n;
-        }
-        else
-        {
-            /* k = 0: below y = at, k = 1: above it */
-            if (k == 0)
-                a->y1 = at;
-            else
-                a->y0 = at;
-            a->cls[k ? 0 : 3] = c0;
-            a->cls[k ? 1 : 2] = c1;
-            sub_side(q, SL, k ? at : q->y0, k ? q->y1 : at, &a->side[SL],
-                     &a->ns[SL]);
-            sub_side(q, SR, k ? at : q->y0, k ? q->y1 : at, &a->side[SR],
-                     &a->ns[SR]);
-            a->side[k ? SB : ST] = mid;
-            a->ns[k ? SB : ST] = n;
-        }
+        int32_t *lo = v ? &a->x0 : &a->y0, *hi = v ? &a->x1 : &a->y1;
+        const int32_t from = *lo, to = *hi;
+        *(k ? lo : hi) = at;
+        a->cls[ends[v][k][0]] = c0;
+        a->cls[ends[v][k][1]] = c1;
+        for (int j = 0; j < 2; j++)
+            sub_side(q, cut[v][j], k ? at : from, k ? to : at,
+                     &a->side[cut[v][j]], &a->ns[cut[v][j]]);
+        a->side[made[v][k]] = mid;
+        a->ns[made[v][k]] = n;
         ok = run_rect(w, a, depth + 1);
     }
     free(mid);
