@@ -607,6 +607,8 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
             continue;
         if (!capsule_interval(g, Gx, Gy, vertical, &lo, &hi))
             continue;
+        if (lo <= 0 && hi >= L && cls0 && *cls1 == cls0)
+            return 0; /* water ends, the segment inside one capsule */
         inside |= (lo > 0 && lo < L) || (hi > 0 && hi < L);
         if (!add_interval(in, &niv, lo, hi, L))
             return -1;
