@@ -9,6 +9,7 @@
 #include "tap.h"
 
 #include <math.h>
+#include <stdlib.h>
 
 /* Rings of block (0, 0) of scene s (n x n cells): without (probe == 0) or
  * with the exact search. */
@@ -185,6 +186,47 @@ int main(void)
     TAP_OK(vertex_near(&r1, 100.3 * WM_Q, 100.3 * WM_Q, 4.0),
            "the island's corner within 1/64 px");
     TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    wm_rings_free(&r0);
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
+    /* A lake whose top edge runs along the sample row y = 60 and a river
+     * whose bank runs 0.2 px above it: the samples on the edge are water
+     * (distance 0), those above it in the river too. The land strip
+     * between is found next to the edge's samples, though the ray rule
+     * puts those samples outside the lake; along the edge itself nothing
+     * is found (the lake's boundary is water). */
+    su_init(&s, 128);
+    const double rect[] = {40, 40, 80, 40, 80, 60, 40, 60};
+    const int nrect = 4;
+    const double bank[] = {20, 62.2, 100, 62.2};
+    su_lake(&s, rect, &nrect, 1);
+    su_river(&s, bank, 2, 2.0);
+    su_finish(&s);
+    TAP_EQ(wm_probe_init(&p, &s, 0, 0), WM_OK, "probe");
+    cls1 = 1;
+    const int kr = wm_probe_crossings(&p, (wm_pt){60 * WM_Q, 60 * WM_Q}, 1,
+                                      WM_Q, 1, &cls1, off, WM_Q);
+    TAP_OK(kr == 2 && off[0] == 1 && abs(off[1] - 51) <= 1,
+           "from a sample on the lake's edge: land at once, then the bank "
+           "at 0.2 px (got %d: %d %d)",
+           kr, kr > 0 ? off[0] : -1, kr > 1 ? off[1] : -1);
+    cls1 = 1;
+    TAP_EQ(wm_probe_crossings(&p, (wm_pt){60 * WM_Q, 60 * WM_Q}, 0, WM_Q, 1,
+                              &cls1, off, WM_Q),
+           0, "along the lake's edge: water all the way");
+    cls1 = 1;
+    TAP_EQ(wm_probe_crossings(&p, (wm_pt){60 * WM_Q, 59 * WM_Q}, 1, WM_Q, 1,
+                              &cls1, off, WM_Q),
+           0, "from inside up to the edge: water all the way");
+    wm_probe_free(&p);
+    TAP_EQ(extract(&s, 0, &r0), WM_OK, "extract from the samples alone");
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_EQ(count_sign(&r0, 1), 1, "samples alone: lake and river merged");
+    TAP_EQ(count_sign(&r1, 1), 2, "exact search: the lake and the river apart");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    TAP_OK(vertex_near(&r1, 60 * WM_Q, 60 * WM_Q, 1.0) &&
+               vertex_near(&r1, 80 * WM_Q, 60 * WM_Q, 1.0),
+           "the lake's top edge kept, corner included");
     wm_rings_free(&r0);
     wm_rings_free(&r1);
     wm_scene_free(&s);

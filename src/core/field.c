@@ -517,7 +517,16 @@ static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
         const int32_t hi = sp->hi[sb_of(j)] < i1 ? sp->hi[sb_of(j)] : i1;
         for (int32_t i = lo; i <= hi; i++)
         {
-            const double d2 = seg_d2(ox + (double)i * WM_Q, py, abx, aby, inv);
+            const double px = ox + (double)i * WM_Q;
+            /* a sample on the edge is exactly 0 away, so water (the
+             * closed rule; the projection's rounding would leave it a few
+             * ulps off, either side of the shore by its parity): the
+             * cross product of lattice differences is exact in double */
+            const double d2 = px * aby == py * abx &&
+                                      px * abx + py * aby >= 0 &&
+                                      px * abx + py * aby <= len2
+                                  ? 0.0
+                                  : seg_d2(px, py, abx, aby, inv);
             const double cur = row[i];
             row[i] = d2 < cur ? d2 : cur;
         }

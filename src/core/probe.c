@@ -385,16 +385,25 @@ static int cmp_interval(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* Lake edge g in the segment's frame: along the axis u, across it w (the
+ * segment's line is w == 0), from G. */
+static void edge_frame(const wm_lake_edge *g, int64_t Gx, int64_t Gy,
+                       int vertical, int64_t *au, int64_t *aw, int64_t *bu,
+                       int64_t *bw)
+{
+    *au = vertical ? g->ay - Gy : g->ax - Gx;
+    *aw = vertical ? g->ax - Gx : g->ay - Gy;
+    *bu = vertical ? g->by - Gy : g->bx - Gx;
+    *bw = vertical ? g->bx - Gx : g->by - Gy;
+}
+
 /* Where lake edge g crosses the segment's line (the half-open rule across
  * the line), as t; returns 0 when it does not. */
 static int edge_toggle(const wm_lake_edge *g, int64_t Gx, int64_t Gy,
                        int vertical, double *t)
 {
-    /* along the axis: u; across: w (the line is w == 0) */
-    const int64_t au = vertical ? g->ay - Gy : g->ax - Gx;
-    const int64_t aw = vertical ? g->ax - Gx : g->ay - Gy;
-    const int64_t bu = vertical ? g->by - Gy : g->bx - Gx;
-    const int64_t bw = vertical ? g->bx - Gx : g->by - Gy;
+    int64_t au, aw, bu, bw;
+    edge_frame(g, Gx, Gy, vertical, &au, &aw, &bu, &bw);
     if ((aw > 0) == (bw > 0))
         return 0;
     const wm_i128 num = (wm_i128)(0 - aw) * (bu - au);
@@ -402,10 +411,41 @@ static int edge_toggle(const wm_lake_edge *g, int64_t Gx, int64_t Gy,
     return 1;
 }
 
+/* The part of the segment [0, L] that lake edge g covers (closed), as a
+ * water interval: a lake's boundary is water, as the field has it (its
+ * distance is 0 there), whatever the ray rule says of its points. Only an
+ * edge along the segment's line or through one of its ends gives one
+ * (where it crosses inside, its toggle does the work). Returns whether g
+ * passes through the segment's start P, or -1 when out of memory. */
+static int edge_cover(wm_probe *in, const wm_lake_edge *g, int64_t Gx,
+                      int64_t Gy, int vertical, int32_t L, size_t *niv)
+{
+    int64_t au, aw, bu, bw;
+    edge_frame(g, Gx, Gy, vertical, &au, &aw, &bu, &bw);
+    if ((aw > 0 && bw > 0) || (aw < 0 && bw < 0) || (au > L && bu > L) ||
+        (au < 0 && bu < 0))
+        return 0;
+    if (aw == 0 && bw == 0) /* along the line */
+        return add_interval(in, niv, (double)(au < bu ? au : bu),
+                            (double)(au > bu ? au : bu), L)
+                   ? (au <= 0 && bu >= 0) || (bu <= 0 && au >= 0)
+                   : -1;
+    int at_p = 0;
+    for (int64_t t = 0; t <= L; t += L) /* through an end */
+        if ((wm_i128)(bu - au) * (0 - aw) == (wm_i128)(bw - aw) * (t - au))
+        {
+            if (!add_interval(in, niv, (double)t, (double)t, L))
+                return -1;
+            at_p |= t == 0;
+        }
+    return at_p;
+}
+
 /* Gathers into in->tg where the lake edges near the segment cross it
- * (inside it); returns how many, or -1 when out of memory. */
+ * (inside it), and into in->iv (*niv) the parts of it they cover (see
+ * edge_cover); returns how many toggles, or -1 when out of memory. */
 static long lake_toggles(wm_probe *in, int64_t Gx, int64_t Gy, wm_pt P,
-                         int vertical, int32_t L)
+                         int vertical, int32_t L, size_t *niv)
 {
     const wm_scene *s = in->s;
     const double mx = P.x + (vertical ? 0 : L / 2.0);
@@ -418,9 +458,16 @@ static long lake_toggles(wm_probe *in, int64_t Gx, int64_t Gy, wm_pt P,
     {
         const struct wm_probe_edge *le =
             &in->ledge[i < m0 ? in->lcells.item[c0 + i] : in->lwide[i - m0]];
-        double t;
-        if (!edge_toggle(&s->edges[le->e], Gx, Gy, vertical, &t) ||
-            !(t > 0 && t < L))
+        const wm_lake_edge *g = &s->edges[le->e];
+        const int at_p = edge_cover(in, g, Gx, Gy, vertical, L, niv);
+        if (at_p < 0)
+            return -1;
+        /* an edge through P toggles there: the ray rule's class of P, a
+         * boundary point, is not that of the piece after it, which is
+         * then classed at a point inside */
+        double t = 0;
+        if (!at_p &&
+            (!edge_toggle(g, Gx, Gy, vertical, &t) || !(t > 0 && t < L)))
             continue;
         if (!wm_grow((void **)&in->tg, &in->tgcap, ntg + 1, sizeof *in->tg))
             return -1;
@@ -613,9 +660,12 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
         if (!add_interval(in, &niv, lo, hi, L))
             return -1;
     }
-    const long ntg = in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L) : 0;
+    const size_t nriver = niv;
+    const long ntg =
+        in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L, &niv) : 0;
     if (ntg < 0)
         return -1;
+    inside |= niv > nriver; /* a lake's edge along the segment or at an end */
     if (!inside && ntg == 0 && (*cls1 < 0 || *cls1 == cls0))
     {
         /* every input's membership is constant along the segment */

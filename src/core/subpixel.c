@@ -40,7 +40,7 @@
  * (two input boundaries crossing, corners.c) in a cell whose four samples
  * are of one class. What stays unseen: three crossings on an edge whose
  * samples differ that is not loose, and a feature narrower than the
- * lattice's rounding (block.c drops rings thinner than 1.5 units).
+ * lattice's rounding (block.c drops rings thinner than 1 unit, 2A/P).
  *
  * Seams: an edge's crossings depend on the inputs only, with every
  * coordinate difference formed in integers, so both blocks sharing an edge
