@@ -23,6 +23,14 @@ interest" whose exact shape the lattice cannot resolve by sampling alone:
             one side of the triangle, so the exact hole is the triangle).
   subpixel  a meandering river 0.1-0.8 px wide and 1-2 lakes of diameter
             0.1-1 px (a polygon of 3-12 vertices) nearby.
+  shore     a lake whose boundary passes through samples (a rectangle with
+            its corners on samples and an edge along a sample row or
+            column, or a triangle with its apex on a sample) and a river
+            (width 0.5-6 m) whose bank runs 0.01-1.5 px from that edge or
+            apex, tilted by up to 3 degrees: a land strip thinner than a
+            pixel along a boundary whose samples have distance 0 (real
+            shores digitised on round coordinates do this). Not part of
+            the seam family's draw.
   seam      one of the four above with its feature of interest moved onto a
             block side (or, one time in five, a block corner): exactly on it
             one time in four, else within +-0.4 of the feature's size (at
@@ -69,7 +77,7 @@ EPSG = scenes.SCENE_EPSG  # 32631
 ORIGIN = (400000.0, 4699968.0)
 
 BASE_FAMILIES = ('wedge', 'parallel', 'island', 'subpixel')
-FAMILIES = BASE_FAMILIES + ('seam',)
+FAMILIES = BASE_FAMILIES + ('seam', 'shore')
 
 
 # ----------------------------------------------------------------------------
@@ -289,8 +297,41 @@ def _subpixel(rng, px):
     return [(river, w)], lakes, meta
 
 
+def _shore(rng, px):
+    g = _log_uniform(rng, 0.01, 1.5) * px
+    w = rng.uniform(0.5, 6.0)
+    tilt = math.radians(rng.uniform(-3.0, 3.0))
+    apex = rng.random() < 0.5
+    if apex:
+        # a triangle whose apex, on a sample, points up at the river
+        h = math.radians(rng.uniform(20.0, 70.0))
+        depth = rng.uniform(8.0, 12.0)
+        lake = [(0.0, 0.0), (-depth * math.tan(h), -depth),
+                (depth * math.tan(h), -depth), (0.0, 0.0)]
+        phi = math.radians(rng.uniform(-60.0, 60.0))
+    else:
+        # a rectangle with its corners on samples, its top edge on a row
+        half = round(rng.uniform(10.0, 20.0) / px) * px
+        depth = round(rng.uniform(6.0, 12.0) / px) * px
+        x0 = round(rng.uniform(-0.5, 0.5) * half / px) * px
+        lake = [(x0 - half, -depth), (x0 + half, -depth), (x0 + half, 0.0),
+                (x0 - half, 0.0), (x0 - half, -depth)]
+        phi = rng.choice((0.0, 0.5, 1.0, 1.5)) * math.pi
+    # the river's bank g above (0, 0), tilted about that point
+    c = (0.0, g + w / 2.0)
+    d = (25.0 * math.cos(tilt), 25.0 * math.sin(tilt))
+    river = [(c[0] - d[0], c[1] - d[1]), (c[0] + d[0], c[1] + d[1])]
+    rot = [(_rot(p, phi)) for p in lake]
+    if not apex:  # right angles keep sample corners on samples
+        rot = [(round(x / px) * px, round(y / px) * px) for x, y in rot]
+    meta = dict(gap_px=g / px, width_m=w, tilt_deg=math.degrees(tilt),
+                apex=apex, normal=_rot((0.0, 1.0), phi), scale=px,
+                on_samples=True)
+    return [([_rot(p, phi) for p in river], w)], [(rot, [])], meta
+
+
 _GENERATORS = {'wedge': _wedge, 'parallel': _parallel, 'island': _island,
-               'subpixel': _subpixel}
+               'subpixel': _subpixel, 'shore': _shore}
 
 
 # ----------------------------------------------------------------------------
@@ -334,6 +375,8 @@ def scene_features(family, seed, pixel_size=PIXEL_SIZE, block_size=BLOCK_SIZE,
         meta.update(seam=where, seam_exact=exact)
     else:
         ax, ay = rng.uniform(lo, hi), rng.uniform(lo, hi)
+    if meta.get('on_samples'):  # the feature's edge or vertex on samples
+        ax, ay = round(ax / pixel_size) * pixel_size, round(ay / pixel_size) * pixel_size
     anchor = (origin[0] + ax, origin[1] + ay)
     unit = pixel_size / LATTICE_Q
 

@@ -159,6 +159,11 @@ def test_generator_feature(scene):
         near = [h for h in holes if h.distance(a) <= 1.5 * px]
         assert near and min(max(h.bounds[2] - h.bounds[0], h.bounds[3] - h.bounds[1])
                             for h in near) < 3.5 * px, scene.describe
+    elif sub == 'shore':
+        # the lake's edge or apex is on a sample, and on the exact boundary
+        assert all(abs(c / px - round(c / px)) < 1e-9 for c in m['anchor']), scene.describe
+        assert w.boundary.distance(a) <= 2.0 * unit, scene.describe
+        assert 0.01 - 1e-9 <= m['gap_px'] <= 1.5 + 1e-9
     else:  # subpixel
         assert 0.1 - 1e-9 <= m['width_px'] <= 0.8 + 1e-9
         assert any(max(p.bounds[2] - p.bounds[0], p.bounds[3] - p.bounds[1]) <= 1.3 * px
