@@ -147,5 +147,48 @@ int main(void)
         wm_rings_free(&r0);
         wm_scene_free(&s);
     }
+    /* a 10 degree wedge between a river 3.3 px wide and one 0.5 px wide:
+     * the tip lies nearer the wide river's far bank than the cut the
+     * samples make, so the nearest ring edge does not take the corner; a
+     * farther one does */
+    {
+        wm_scene s;
+        su_init(&s, 128);
+        const double v[2] = {31.359375, 47.0390625};
+        const double ra = 1.633184 * 2, rb = 0.247268 * 2;
+        const double a[] = {v[0], v[1], 95.7265625, 98.96875};
+        const double b[] = {v[0], v[1], 85.78125, 109.31640625};
+        su_river(&s, a, 2, ra);
+        su_river(&s, b, 2, rb);
+        su_finish(&s);
+        /* the tip: a's left bank meets b's right bank */
+        const double la = hypot(a[2] - a[0], a[3] - a[1]);
+        const double lb = hypot(b[2] - b[0], b[3] - b[1]);
+        const double ua[2] = {(a[2] - a[0]) / la, (a[3] - a[1]) / la};
+        const double ub[2] = {(b[2] - b[0]) / lb, (b[3] - b[1]) / lb};
+        /* v + s ua + ra (-ua.y, ua.x) = v + t ub + rb (ub.y, -ub.x) */
+        const double rx = rb * ub[1] + ra * ua[1],
+                     ry = -rb * ub[0] - ra * ua[0];
+        const double det = ua[0] * -ub[1] + ub[0] * ua[1];
+        const double sa = (rx * -ub[1] + ub[0] * ry) / det;
+        const double cx = (v[0] + sa * ua[0] - ra * ua[1]) * WM_Q;
+        const double cy = (v[1] + sa * ua[1] + ra * ua[0]) * WM_Q;
+        wm_field f;
+        wm_rings r = {0};
+        wm_field_compute(&s, 0, 0, 129, 129, NULL, &f, NULL);
+        wm_contour_extract(&f, &r, NULL);
+        const double before = nearest_vertex(&r, cx, cy) / WM_Q;
+        TAP_EQ(wm_crease_recover(&s, &f, 0, 0, &r, NULL), WM_OK,
+               "recover beside a narrow river");
+        const double after = nearest_vertex(&r, cx, cy) / WM_Q;
+        TAP_OK(after < 0.01 && before > 0.5,
+               "wedge beside a narrow river: tip %.3f px from a vertex, "
+               "%.4f px after",
+               before, after);
+        TAP_OK(ring_meetings(&r) == 0, "rings still simple and disjoint");
+        wm_field_free(&f);
+        wm_rings_free(&r);
+        wm_scene_free(&s);
+    }
     return TAP_DONE();
 }

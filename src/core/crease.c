@@ -286,12 +286,18 @@ static int visit_edges(ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
     return 1;
 }
 
-/* nearest edge search state */
+/* How many of the nearest edges a corner may split (with their
+ * neighbours): the nearest may belong to another part of the rings (the
+ * far bank of a narrow river beside a wedge's tip). */
+#define NEAREST 4
+
+/* nearest edges search state: best[0] <= best[1] <= ..., n of them */
 typedef struct
 {
     const ringgrid *g;
-    double x, y, best;
-    size_t edge;
+    double x, y, best[NEAREST];
+    size_t edge[NEAREST];
+    int n;
     int32_t S; /* the block square's side: its edges are never split */
 } nearest;
 
@@ -321,11 +327,24 @@ static int nearest_fn(void *arg, size_t k)
     if (on_square(a, b, n->S))
         return 1;
     const double d = edge_dist(a, b, n->x, n->y);
-    if (d < n->best || (d == n->best && k < n->edge))
+    int i = n->n;
+    for (int j = 0; j < n->n; j++)
+        if (n->edge[j] == k)
+            return 1; /* met again (registered in several cells) */
+    while (i > 0 &&
+           (d < n->best[i - 1] || (d == n->best[i - 1] && k < n->edge[i - 1])))
+        i--;
+    if (i == NEAREST)
+        return 1;
+    const int last = n->n < NEAREST ? n->n : NEAREST - 1;
+    for (int j = last; j > i; j--)
     {
-        n->best = d;
-        n->edge = k;
+        n->best[j] = n->best[j - 1];
+        n->edge[j] = n->edge[j - 1];
     }
+    n->best[i] = d;
+    n->edge[i] = k;
+    n->n = last + 1;
     return 1;
 }
 
@@ -514,6 +533,37 @@ static int cmp_key(const void *a, const void *b)
  * inserted, only those in them), updates their states and rebuilds the
  * rings with the accepted corners; *ninserted says how many. *newhot
  * receives this pass's hot cells (*nnewhot keys, caller frees). */
+/* Sets *ka to the first of the nearest edges nr (each, else one of its
+ * neighbours: a truncated tip ends in a vertex, and either edge at it may
+ * be the one to split) into which c may be inserted, or SIZE_MAX; returns
+ * -1 when out of memory, else 0. */
+static int first_insertable(wm_probe *in, ringgrid *g, const nearest *nr,
+                            wm_pt c, const uint8_t *split, const insertion *ins,
+                            size_t nins, size_t *ka)
+{
+    const wm_rings *rings = g->r;
+    *ka = SIZE_MAX;
+    for (int e = 0; e < nr->n; e++)
+    {
+        const size_t tries[3] = {nr->edge[e],
+                                 succ(rings, g->ring_of, nr->edge[e]),
+                                 pred(rings, g->ring_of, nr->edge[e])};
+        for (int t = 0; t < 3; t++)
+        {
+            const int ok =
+                can_insert(in, g, tries[t], c, nr->S, split, ins, nins);
+            if (ok < 0)
+                return -1;
+            if (ok)
+            {
+                *ka = tries[t];
+                return 0;
+            }
+        }
+    }
+    return 0;
+}
+
 static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
                              size_t ncs, const uint64_t *hot, size_t nhot,
                              uint64_t **newhot, size_t *nnewhot,
@@ -550,47 +600,43 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
     {
         corner *cd = &cs[todo[q]];
         const wm_pt c = cd->c;
-        /* nearest edge: a small search first (most corners are already
-         * within a quarter pixel), then up to WM_CREASE_REACH */
-        nearest nr = {&g, c.x, c.y, INFINITY, SIZE_MAX, S};
+        /* nearest edges: a small search first (most corners are already
+         * within a quarter pixel of one) */
+        nearest nr = {&g, c.x, c.y, {0}, {0}, 0, S};
         int32_t R = WM_Q;
         if (visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
                         &nr) < 0)
             goto nomem;
-        if (nr.best <= WM_Q / 4.0)
+        if (nr.n > 0 && nr.best[0] <= WM_Q / 4.0)
         {
             cd->state = C_CLOSE;
-            cd->e0 = rings->pts[nr.edge];
-            cd->e1 = rings->pts[succ(rings, g.ring_of, nr.edge)];
+            cd->e0 = rings->pts[nr.edge[0]];
+            cd->e1 = rings->pts[succ(rings, g.ring_of, nr.edge[0])];
             continue;
         }
-        if (nr.best > R)
-        {
-            R = WM_CREASE_REACH;
-            if (visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
-                            &nr) < 0)
-                goto nomem;
-        }
-        if (nr.edge == SIZE_MAX || nr.best > R)
-            continue;
         /* a corner of the union, not one buried under another input */
         if (fabs(wm_probe_distance(in, c.x, c.y, 4.0 * WM_Q)) > 1.0)
         {
             cd->state = C_DONE;
             continue;
         }
-        /* the nearest edge, else one of its neighbours (a truncated tip
-         * ends in a vertex: either edge at it may be the one to split) */
-        const size_t tries[3] = {nr.edge, succ(rings, g.ring_of, nr.edge),
-                                 pred(rings, g.ring_of, nr.edge)};
+        /* the nearest edges within a pixel, then (none taking the corner)
+         * within WM_CREASE_REACH */
         size_t ka = SIZE_MAX;
-        for (int t = 0; t < 3 && ka == SIZE_MAX; t++)
+        for (int pass = nr.n ? 0 : 1; pass < 2 && ka == SIZE_MAX; pass++)
         {
-            const int ok = can_insert(in, &g, tries[t], c, S, split, ins, nins);
-            if (ok < 0)
+            if (pass == 1)
+            {
+                R = WM_CREASE_REACH;
+                nr.n = 0;
+                if (visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R,
+                                nearest_fn, &nr) < 0)
+                    goto nomem;
+            }
+            while (nr.n > 0 && nr.best[nr.n - 1] > R)
+                nr.n--;
+            if (first_insertable(in, &g, &nr, c, split, ins, nins, &ka) < 0)
                 goto nomem;
-            if (ok)
-                ka = tries[t];
         }
         if (ka == SIZE_MAX)
             continue;
