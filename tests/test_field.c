@@ -131,6 +131,19 @@ int main(void)
         }
     TAP_OK(lo >= -2.0f && hi <= 2.0f, "values clamped to the band [%g, %g]",
            (double)lo, (double)hi);
+    /* a cell's four samples in one lookup, as wm_field_at gives them */
+    size_t celldiff = 0;
+    for (int r = 0; r < 128; r++)
+        for (int c = 0; c < 64; c++)
+        {
+            float v[4];
+            wm_field_cell(&a, c, r, v);
+            celldiff += v[0] != wm_field_at(&a, c, r) ||
+                        v[1] != wm_field_at(&a, c + 1, r) ||
+                        v[2] != wm_field_at(&a, c + 1, r + 1) ||
+                        v[3] != wm_field_at(&a, c, r + 1);
+        }
+    TAP_EQ(celldiff, 0, "wm_field_cell: the four samples of every cell");
     /* exact distance away from junctions: |d| = dist - r on the river */
     {
         /* sample (30, 26): distance to the first segment */

@@ -172,8 +172,8 @@ static int cell(state *s, int32_t c, int32_t r, const float *p)
 int wm_contour_cell_edge(const wm_field *f, int32_t c, int32_t r, wm_pt *a,
                          wm_pt *b)
 {
-    const float v[4] = {wm_field_at(f, c, r), wm_field_at(f, c + 1, r),
-                        wm_field_at(f, c + 1, r + 1), wm_field_at(f, c, r + 1)};
+    float v[4];
+    wm_field_cell(f, c, r, v);
     const int w[4] = {v[0] <= 0, v[1] <= 0, v[2] <= 0, v[3] <= 0};
     const int32_t X = c * WM_Q, Y = r * WM_Q;
     int nout = 0, nin = 0;

@@ -1047,6 +1047,24 @@ WM_CLONES uint64_t wm_field_water_bits(const float *row)
     return m | (uint64_t)(row[WM_TILE] <= 0) << WM_TILE;
 }
 
+void wm_field_cell(const wm_field *f, int32_t c, int32_t r, float v[4])
+{
+    const int32_t tx = c / WM_TILE < f->ntx ? c / WM_TILE : f->ntx - 1;
+    const int32_t ty = r / WM_TILE < f->nty ? r / WM_TILE : f->nty - 1;
+    const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+    if (f->kind[t] != WM_TILE_MIXED)
+    {
+        const float u = f->kind[t] == WM_TILE_WATER ? -f->band : f->band;
+        v[0] = v[1] = v[2] = v[3] = u;
+        return;
+    }
+    const float *p = f->val[t] + (r - ty * WM_TILE) * TS1 + (c - tx * WM_TILE);
+    v[0] = p[0];
+    v[1] = p[1];
+    v[2] = p[TS1 + 1];
+    v[3] = p[TS1];
+}
+
 void wm_field_prefetch(const wm_field *f, int32_t c, int32_t r)
 {
     int32_t off;

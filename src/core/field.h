@@ -113,6 +113,12 @@ extern "C"
     /** Value of window sample (c, r), 0 <= c < w, 0 <= r < h. */
     float wm_field_at(const wm_field *f, int32_t c, int32_t r);
 
+    /** The values of the four samples of cell (c, r) (0 <= c < w - 1,
+     *  0 <= r < h - 1) counter-clockwise from (c, r): (c, r), (c + 1, r),
+     *  (c + 1, r + 1), (c, r + 1), as wm_field_at() gives them, with one
+     *  tile lookup (a cell lies in one tile). */
+    void wm_field_cell(const wm_field *f, int32_t c, int32_t r, float v[4]);
+
     /** Bit i set where row[i] <= 0 (water), i = 0 .. WM_TILE: one row of a
      *  tile's samples as the bits that marching squares and the sub-pixel
      *  screen test. */

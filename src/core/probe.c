@@ -385,6 +385,33 @@ static int cmp_interval(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* A query's lists hold a few entries: sorted by insertion below this
+ * many (qsort's call costs more there), by qsort above. */
+#define SMALL_SORT 16
+
+_Static_assert(sizeof(struct wm_probe_toggle) <= 16 && 2 * sizeof(double) <= 16,
+               "sort_small swaps through 16 bytes");
+
+/* Sorts n elements of `size` (<= 16) bytes at base by cmp (stable). */
+static void sort_small(void *base, size_t n, size_t size,
+                       int (*cmp)(const void *, const void *))
+{
+    if (n > SMALL_SORT)
+    {
+        qsort(base, n, size, cmp);
+        return;
+    }
+    unsigned char *b = base, tmp[16];
+    for (size_t i = 1; i < n; i++)
+        for (size_t q = i; q > 0 && cmp(b + (q - 1) * size, b + q * size) > 0;
+             q--)
+        {
+            memcpy(tmp, b + q * size, size);
+            memcpy(b + q * size, b + (q - 1) * size, size);
+            memcpy(b + (q - 1) * size, tmp, size);
+        }
+}
+
 /* Lake edge g in the segment's frame: along the axis u, across it w (the
  * segment's line is w == 0), from G. */
 static void edge_frame(const wm_lake_edge *g, int64_t Gx, int64_t Gy,
@@ -483,7 +510,7 @@ static int lake_intervals(wm_probe *in, wm_pt P, int vertical, int32_t L,
 {
     const wm_scene *s = in->s;
     if (ntg > 1)
-        qsort(in->tg, ntg, sizeof *in->tg, cmp_toggle);
+        sort_small(in->tg, ntg, sizeof *in->tg, cmp_toggle);
     /* every polygon odd at P (the ray) or toggling inside: its pieces */
     size_t nt = lake_parities(in, P.x, P.y, 0);
     for (size_t i = 0; i < ntg; i++)
@@ -677,7 +704,7 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
         if (!lake_intervals(in, P, vertical, L, (size_t)ntg, &niv))
             return -1;
     if (niv > 1)
-        qsort(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
+        sort_small(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
     return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
 }
 

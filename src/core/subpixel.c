@@ -504,10 +504,10 @@ static int buried(wm_probe *probe, wm_pt p)
 /* Whether the four samples of cell (c, r) are of one class. */
 static int uniform_cell(const wm_field *f, int32_t c, int32_t r)
 {
-    const int w = wm_field_at(f, c, r) <= 0;
-    return (wm_field_at(f, c + 1, r) <= 0) == w &&
-           (wm_field_at(f, c, r + 1) <= 0) == w &&
-           (wm_field_at(f, c + 1, r + 1) <= 0) == w;
+    float v[4];
+    wm_field_cell(f, c, r, v);
+    const int w = v[0] <= 0;
+    return (v[1] <= 0) == w && (v[2] <= 0) == w && (v[3] <= 0) == w;
 }
 
 /* Seeds the cells of the inputs smaller than two pixels: lake rings (the
@@ -1207,13 +1207,13 @@ static int hidden_cell(const wm_field *f, wm_probe *probe, const wm_hidden *h,
     if (!buf)
         return 0;
     const int32_t X = c * WM_Q, Y = r * WM_Q;
+    float v[4];
+    wm_field_cell(f, c, r, v);
     rect q = {X,
               Y,
               X + WM_Q,
               Y + WM_Q,
-              {wm_field_at(f, c, r) <= 0, wm_field_at(f, c + 1, r) <= 0,
-               wm_field_at(f, c + 1, r + 1) <= 0,
-               wm_field_at(f, c, r + 1) <= 0},
+              {v[0] <= 0, v[1] <= 0, v[2] <= 0, v[3] <= 0},
               {0},
               {0},
               NULL,
