@@ -52,7 +52,7 @@ NARROW_PX = 2.0                       # + land narrower than this (see the docst
 MESH_REL = 1e-9
 OPENCL_AREA_REL = 1e-4
 
-# seeds per family: 40 (200 scenes, ~2.5 min on 2 cores); WM_TOPOLOGY_SEEDS=N runs
+# seeds per family: 40 (240 scenes, ~4.5 min on 2 cores); WM_TOPOLOGY_SEEDS=N runs
 # N per family by hand (bench/topology.py prints the figures per family)
 SEEDS = range(int(os.environ.get('WM_TOPOLOGY_SEEDS', '40')))
 SCENE_IDS = ['%s-%d' % (f, s) for f in adversarial.FAMILIES for s in SEEDS]
