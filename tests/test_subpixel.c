@@ -230,5 +230,27 @@ int main(void)
     wm_rings_free(&r0);
     wm_rings_free(&r1);
     wm_scene_free(&s);
+    /* Two rivers 2 px wide whose banks lie on the sample rows y = 61 and
+     * y = 62: every sample is water (the banks' at distance 0), the strip
+     * of land between them is exactly one pixel. */
+    su_init(&s, 128);
+    const double low[] = {20, 60, 100, 60}, high[] = {20, 63, 100, 63};
+    su_river(&s, low, 2, 1.0);
+    su_river(&s, high, 2, 1.0);
+    su_finish(&s);
+    TAP_EQ(wm_probe_init(&p, &s, 0, 0), WM_OK, "probe");
+    cls1 = 1;
+    const int kb = wm_probe_crossings(&p, (wm_pt){50 * WM_Q, 61 * WM_Q}, 1,
+                                      WM_Q, 1, &cls1, off, WM_Q);
+    TAP_OK(kb == 2 && off[0] == 1 && off[1] == WM_Q - 1,
+           "between banks through both samples: the whole pixel is land "
+           "(got %d: %d %d)",
+           kb, kb > 0 ? off[0] : -1, kb > 1 ? off[1] : -1);
+    wm_probe_free(&p);
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_EQ(count_sign(&r1, 1), 2, "the two rivers apart");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
     return TAP_DONE();
 }

@@ -661,7 +661,7 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
     const double mx = P.x + (vertical ? 0 : L / 2.0);
     const double my = P.y + (vertical ? L / 2.0 : 0);
     size_t c0, c1;
-    int inside = 0; /* an input's boundary crosses the segment */
+    int inside = 0; /* an input's boundary meets the segment, ends included */
     const int32_t cx = dcell(in, mx), cy = dcell(in, my);
     wm_cells_row(&in->cells, cy, cx, cx, &c0, &c1);
     const size_t n0 = c1 - c0;
@@ -683,7 +683,10 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
             continue;
         if (lo <= 0 && hi >= L && cls0 && *cls1 == cls0)
             return 0; /* water ends, the segment inside one capsule */
-        inside |= (lo > 0 && lo < L) || (hi > 0 && hi < L);
+        /* a bank through an end sample counts: the end's class may be
+         * water only by that bank (distance 0), the land beside it found
+         * below (two rivers whose banks lie on sample rows) */
+        inside |= (lo >= 0 && lo <= L) || (hi >= 0 && hi <= L);
         if (!add_interval(in, &niv, lo, hi, L))
             return -1;
     }
