@@ -202,13 +202,13 @@ int wm_contour_cell_edge(const wm_field *f, int32_t c, int32_t r, wm_pt *a,
     return nout == 1 && nin == 1;
 }
 
-/* Position along the square, counter-clockwise from (0,0). */
 /* Whether p lies on the sides of the block square [0, S]^2. */
 static int on_square(wm_pt p, int32_t S)
 {
     return p.x == 0 || p.y == 0 || p.x == S || p.y == S;
 }
 
+/* Position along the square, counter-clockwise from (0,0). */
 static int64_t perim(wm_pt p, int32_t S)
 {
     if (p.y == 0)

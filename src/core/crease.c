@@ -528,11 +528,6 @@ static int cmp_key(const void *a, const void *b)
     return c ? c : wm_pt_cmp(x->hi, y->hi);
 }
 
-/* One pass: tries the open corners against the current rings (with hot,
- * the sorted keys of the hot cells next to the corners the previous pass
- * inserted, only those in them), updates their states and rebuilds the
- * rings with the accepted corners; *ninserted says how many. *newhot
- * receives this pass's hot cells (*nnewhot keys, caller frees). */
 /* Sets *ka to the first of the nearest edges nr (each, else one of its
  * neighbours: a truncated tip ends in a vertex, and either edge at it may
  * be the one to split) into which c may be inserted, or SIZE_MAX; returns
@@ -564,6 +559,11 @@ static int first_insertable(wm_probe *in, ringgrid *g, const nearest *nr,
     return 0;
 }
 
+/* One pass: tries the open corners against the current rings (with hot,
+ * the sorted keys of the hot cells next to the corners the previous pass
+ * inserted, only those in them), updates their states and rebuilds the
+ * rings with the accepted corners; *ninserted says how many. *newhot
+ * receives this pass's hot cells (*nnewhot keys, caller frees). */
 static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
                              size_t ncs, const uint64_t *hot, size_t nhot,
                              uint64_t **newhot, size_t *nnewhot,
