@@ -522,9 +522,8 @@ static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
              * closed rule; the projection's rounding would leave it a few
              * ulps off, either side of the shore by its parity): the
              * cross product of lattice differences is exact in double */
-            const double d2 = px * aby == py * abx &&
-                                      px * abx + py * aby >= 0 &&
-                                      px * abx + py * aby <= len2
+            const double dot = px * abx + py * aby;
+            const double d2 = px * aby == py * abx && dot >= 0 && dot <= len2
                                   ? 0.0
                                   : seg_d2(px, py, abx, aby, inv);
             const double cur = row[i];
