@@ -4,20 +4,21 @@
  * about 1e-6 px, not bit for bit, and block seams need bit-identical
  * shared samples).
  *
- * AUTO takes an OpenCL GPU (or accelerator) when there is one. With only a
- * CPU OpenCL device (PoCL) it takes the C path: on CPUs the C path's
- * vectorized double loops beat PoCL's kernel (docs/opencl.md has the
- * measurements); naming a device with WATERMESH_OPENCL_DEVICE makes AUTO
- * use it anyway. No platform, no device, a scene outside the kernel's
- * exact range or a failing build: AUTO falls back to the C path with a
- * CPLDebug line, OPENCL fails with a CPLError. A device failing during a
- * run: AUTO warns once (CE_Warning, from the thread that runs the blocks)
- * and the C path computes the rest; OPENCL fails the block.
+ * AUTO takes the C path and loads no OpenCL at all, unless
+ * WATERMESH_OPENCL_DEVICE names a device: the C path was faster at the
+ * default thread count on every machine measured, a 16-core host with an
+ * NVIDIA H200 included (docs/opencl.md), and probing costs 40-200 ms and
+ * 60 MB of libraries per process. OPENCL takes the first GPU or
+ * accelerator, else the first device. A named device that cannot be had
+ * (no platform, no match, a scene outside the kernel's exact range, a
+ * failing build): AUTO falls back to the C path with a CPLDebug line,
+ * OPENCL fails with a CPLError. A device failing during a run: AUTO warns
+ * once (CE_Warning, from the thread that runs the blocks) and the C path
+ * computes the rest; OPENCL fails the block.
  *
  * Opened devices (context and built program, ~0.6 s to build cold) are kept
  * per process, keyed by the device name and kernel folder, so a second
- * scene or dataset reuses them; AUTO's probe (~40 ms the first time, for
- * loading the OpenCL implementations) is remembered likewise.
+ * scene or dataset reuses them.
  */
 #include "wm_private.h"
 
@@ -39,43 +40,6 @@ typedef struct cached
 
 static cached *g_devices;
 static pthread_mutex_t g_mu = PTHREAD_MUTEX_INITIALIZER;
-
-/* The last probe (DEVICE=AUTO): loading the OpenCL implementations costs
- * ~40 ms on first use (PoCL), so a process probes once per device name. */
-static struct
-{
-    char *name; /* NULL: no probe yet */
-    wm_status st;
-    char desc[256];
-    int gpu;
-    char *err;
-} g_probe;
-
-/* wm_cl_probe, remembered per process; *err (CPLStrdup'ed, caller frees)
- * on failure. */
-static wm_status probe(const char *name, char *desc, size_t desc_size, int *gpu,
-                       char **err)
-{
-    name = name ? name : "";
-    pthread_mutex_lock(&g_mu);
-    if (!g_probe.name || strcmp(g_probe.name, name) != 0)
-    {
-        CPLFree(g_probe.name);
-        CPLFree(g_probe.err);
-        g_probe.name = CPLStrdup(name);
-        g_probe.err = NULL;
-        wm_ctx ctx = {WMKeepFirstError, &g_probe.err, NULL};
-        g_probe.st = wm_cl_probe(name, g_probe.desc, sizeof g_probe.desc,
-                                 &g_probe.gpu, &ctx);
-    }
-    const wm_status st = g_probe.st;
-    snprintf(desc, desc_size, "%s", g_probe.desc);
-    *gpu = g_probe.gpu;
-    if (st != WM_OK)
-        *err = CPLStrdup(g_probe.err ? g_probe.err : "no OpenCL device");
-    pthread_mutex_unlock(&g_mu);
-    return st;
-}
 
 /* The open device for (name, kernel_dir), opened on first use. NULL with
  * *err set (the caller frees it with CPLFree) when that failed. */
@@ -118,9 +82,6 @@ void WMDeviceCleanup(void)
         CPLFree(c->err);
         CPLFree(c);
     }
-    CPLFree(g_probe.name);
-    CPLFree(g_probe.err);
-    memset(&g_probe, 0, sizeof g_probe);
     pthread_mutex_unlock(&g_mu);
 }
 
@@ -205,34 +166,15 @@ int WMDeviceSelect(WMScene *s)
     s->device = d;
     d->auto_mode = kind == WM_DEVICE_AUTO;
     snprintf(d->desc, sizeof d->desc, "CPU (C path)");
-    if (kind == WM_DEVICE_CPU)
-    {
-        CPLDebug("WATERMESH", "DEVICE=CPU: the C path");
-        return TRUE;
-    }
     const char *name = CPLGetConfigOption("WATERMESH_OPENCL_DEVICE", NULL);
     const char *kernel_dir = CPLGetConfigOption("WATERMESH_KERNEL_DIR", NULL);
-    const int named = name && *name;
     char *msg = NULL;
     int ok = TRUE;
-    if (kind == WM_DEVICE_AUTO)
+    if (kind == WM_DEVICE_CPU || (d->auto_mode && !(name && *name)))
     {
-        char desc[256], why[400];
-        int gpu = 0;
-        if (probe(name, desc, sizeof desc, &gpu, &msg) != WM_OK)
-        {
-            ok = use_c(d, msg);
-            goto done;
-        }
-        if (!gpu && !named)
-        {
-            snprintf(why, sizeof why,
-                     "the only OpenCL device, %s, is a CPU, where the C path "
-                     "is faster",
-                     desc);
-            ok = use_c(d, why);
-            goto done;
-        }
+        CPLDebug("WATERMESH", "DEVICE=%s: the C path",
+                 d->auto_mode ? "AUTO" : "CPU");
+        return TRUE;
     }
     if (!wm_cl_built())
     {
