@@ -40,7 +40,7 @@ static void usage(int code)
         "       [-merge_distance <m>] [-min_feature_area <m2>]\n"
         "       [-device AUTO|CPU|OPENCL] [-num_threads <n>|ALL_CPUS]\n"
         "       [-target_srs <srs>] [-spat <xmin> <ymin> <xmax> <ymax>]\n"
-        "       [-mesh_geometry MULTIPOLYGON|TIN]\n"
+        "       [-mesh_geometry MULTIPOLYGON|TIN|TRIANGLES]\n"
         "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco "
         "<NAME>=<VALUE>]...\n"
         "       [-overwrite] [-progress|-q] [-stats]\n"
@@ -92,16 +92,14 @@ static GDALDriverH guess_driver(const char *dst)
 
 static OGRLayerH make_layer(GDALDatasetH ds, const char *name,
                             OGRwkbGeometryType t, OGRSpatialReferenceH srs,
-                            char **lco, const char *last, OGRFieldType lt)
+                            char **lco, const WMField *fields)
 {
     OGRLayerH l = GDALDatasetCreateLayer(ds, name, srs, t, lco);
     if (!l)
         return NULL;
-    const char *names[3] = {"block_x", "block_y", last};
-    const OGRFieldType types[3] = {OFTInteger, OFTInteger, lt};
-    for (int i = 0; i < 3; i++)
+    for (const WMField *f = fields; f->name; f++)
     {
-        OGRFieldDefnH fd = OGR_Fld_Create(names[i], types[i]);
+        OGRFieldDefnH fd = OGR_Fld_Create(f->name, f->type);
         const OGRErr e = OGR_L_CreateField(l, fd, TRUE);
         OGR_Fld_Destroy(fd);
         if (e != OGRERR_NONE)
@@ -305,11 +303,12 @@ static int write_output(const WMScene *scene, GDALDriverH drv, const char *path,
     GDALDatasetH mout = out && mesh_path ? GDALCreate(drv, mesh_path, 0, 0, 0,
                                                       GDT_Unknown, dsco)
                                          : out;
-    OGRLayerH lw = out && mout ? make_layer(out, "water", wkbPolygon,
-                                            scene->hSRS, lco, "area", OFTReal)
-                               : NULL;
+    OGRLayerH lw = out && mout
+                       ? make_layer(out, "water", wkbPolygon, scene->hSRS, lco,
+                                    WMLayerFields(scene, FALSE))
+                       : NULL;
     OGRLayerH lm = lw ? make_layer(mout, "mesh", WMMeshType(scene), scene->hSRS,
-                                   lco, "triangles", OFTInteger)
+                                   lco, WMLayerFields(scene, TRUE))
                       : NULL;
     int ok = lw && lm;
     if (!ok)

@@ -376,6 +376,34 @@ def test_mesh_geometry_tin_reads_back(wm, simple_options, simple_args, tmp_dir, 
     assert got == want > 0
 
 
+@pytest.mark.parametrize('ext,mesh_file', [('gpkg', 'out.gpkg'), ('fgb', 'out_mesh.fgb'),
+                                           ('shp', 'out_mesh.shp')])
+def test_mesh_geometry_triangles_reads_back(wm, simple_options, simple_args, tmp_dir, ext,
+                                            mesh_file):
+    """-mesh_geometry TRIANGLES to GeoPackage, FlatGeobuf and Shapefile: one
+    valid Polygon per triangle, as many as the triangles the default form
+    counts, each polygon's share under its key."""
+    out = os.path.join(tmp_dir, 'tri_' + ext)
+    os.mkdir(out)
+    p = wm.cli(simple_args + ['-mesh_geometry', 'TRIANGLES', os.path.join(out, 'out.' + ext)])
+    assert p.returncode == 0, p.stderr
+    ds = gdal.OpenEx(os.path.join(out, mesh_file), gdal.OF_VECTOR)
+    lyr = ds.GetLayerByName('mesh') if ext == 'gpkg' else ds.GetLayer(0)
+    ref = wm.run(simple_options).mesh
+    want = {}
+    for f in ref:
+        key = (f.fields['block_x'], f.fields['block_y'], f.fields['polygon'])
+        want[key] = want.get(key, 0) + f.fields['triangles']
+    got = {}
+    for f in lyr:
+        g = f.GetGeometryRef()
+        assert ogr.GT_Flatten(g.GetGeometryType()) == ogr.wkbPolygon, g.GetGeometryName()
+        assert g.GetGeometryRef(0).GetPointCount() == 4 and g.IsValid()
+        key = (f['block_x'], f['block_y'], f['polygon'])
+        got[key] = got.get(key, 0) + 1
+    assert got == want and sum(want.values()) > 0
+
+
 def test_lco(wm, simple_args, tmp_dir):
     dst = os.path.join(tmp_dir, 'out.gpkg')
     ok(wm.cli(simple_args + ['-lco', 'FID=wm_fid', dst]))

@@ -114,6 +114,7 @@ def test_water_layer_schema(wm, simple_options):
     assert ft.get('block_x') == ogr.OFTInteger, ft
     assert ft.get('block_y') == ogr.OFTInteger, ft
     assert ft.get('area') == ogr.OFTReal, ft
+    assert ft.get('polygon') == ogr.OFTInteger, ft
 
 
 def test_mesh_layer_schema(wm, simple_options):
@@ -125,6 +126,19 @@ def test_mesh_layer_schema(wm, simple_options):
     assert ft.get('block_x') == ogr.OFTInteger, ft
     assert ft.get('block_y') == ogr.OFTInteger, ft
     assert ft.get('triangles') == ogr.OFTInteger, ft
+    assert ft.get('polygon') == ogr.OFTInteger, ft
+
+
+def test_polygon_field_names_the_water_polygon(wm, simple_options):
+    """(block_x, block_y, polygon) is a key of the water layer, and each
+    mesh feature carries its water polygon's key."""
+    ds, cap = wm.open(simple_options)
+    assert ds is not None, cap.text
+    water = [(f['block_x'], f['block_y'], f['polygon']) for f in ds.GetLayerByName('water')]
+    mesh = [(f['block_x'], f['block_y'], f['polygon']) for f in ds.GetLayerByName('mesh')]
+    assert len(set(water)) == len(water) > 1
+    assert mesh == water
+    assert min(p for _, _, p in water) == 0
 
 
 def _triangles(g):
@@ -159,6 +173,37 @@ def test_mesh_geometry_tin(wm, simple_options):
         assert all(t.is_valid and t.area > 0 for t in tris)
         total = sum(t.area for t in tris)
         assert abs(unary_union(tris).area - total) <= 1e-9 * total
+
+
+def test_mesh_geometry_triangles(wm, simple_options):
+    """MESH_GEOMETRY=TRIANGLES: one valid Polygon feature per triangle,
+    carrying its water polygon's key; together the triangles of each
+    polygon are the default MultiPolygon's, and the feature count (fast
+    and by reading) is the number of triangles; FIDs are unique."""
+    ds, cap = wm.open(with_(simple_options, MESH_GEOMETRY='TRIANGLES'))
+    assert ds is not None, cap.text
+    lyr = ds.GetLayerByName('mesh')
+    assert ogr.GT_Flatten(lyr.GetGeomType()) == ogr.wkbPolygon, ogr.GeometryTypeToName(lyr.GetGeomType())
+    assert 'triangles' not in field_types(lyr) and field_types(lyr).get('polygon') == ogr.OFTInteger
+    ref_ds, _ = wm.open(simple_options)
+    want = {(f['block_x'], f['block_y'], f['polygon']): _triangles(f.GetGeometryRef())
+            for f in ref_ds.GetLayerByName('mesh')}
+    got, fids = {}, set()
+    for f in lyr:
+        g = f.GetGeometryRef()
+        assert g.GetGeometryType() == ogr.wkbPolygon and g.GetGeometryCount() == 1
+        assert g.GetGeometryRef(0).GetPointCount() == 4 and g.IsValid() and g.GetArea() > 0
+        fids.add(f.GetFID())
+        key = (f['block_x'], f['block_y'], f['polygon'])
+        ring = g.GetGeometryRef(0)
+        got.setdefault(key, []).append(
+            tuple(sorted((round(ring.GetX(k), 6), round(ring.GetY(k), 6)) for k in range(3))))
+    n = sum(len(t) for t in want.values())
+    assert len(fids) == n > 0
+    assert {k: sorted(v) for k, v in got.items()} == want
+    assert lyr.GetFeatureCount() == n
+    feat = lyr.GetFeature(sorted(fids)[len(fids) // 2])
+    assert feat is not None and feat.GetGeometryRef().GetGeometryType() == ogr.wkbPolygon
 
 
 def test_layer_srs_is_rivers_crs(wm, simple_options):

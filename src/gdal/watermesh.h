@@ -40,11 +40,12 @@ OGRSpatialReferenceH CPL_DLL WMGetWorkingSRS(OGRLayerH hRivers,
  * @param hLakes   lakes (Polygon/MultiPolygon), or NULL (not both NULL)
  * @param hWater   output layer for polygons (one feature per connected
  *                 polygon per block), or NULL; fields block_x, block_y,
- *                 area are set when the layer has them
+ *                 area, polygon are set when the layer has them
  * @param hMesh    output layer for triangles (one MultiPolygon, or TIN
- *                 under MESH_GEOMETRY=TIN, per polygon per block), or
- *                 NULL; fields block_x, block_y, triangles are set when
- *                 present
+ *                 under MESH_GEOMETRY=TIN, per polygon per block; one
+ *                 Polygon per triangle under MESH_GEOMETRY=TRIANGLES), or
+ *                 NULL; fields block_x, block_y, triangles, polygon are set
+ *                 when present
  * @param papszOptions WIDTH, WIDTH_FIELD, PIXEL_SIZE, BLOCK_SIZE, SIMPLIFY,
  *                 METHOD, HEURISTIC, MERGE_DISTANCE, MIN_FEATURE_AREA,
  *                 MESH_GEOMETRY, DEVICE, NUM_THREADS, TARGET_SRS (see

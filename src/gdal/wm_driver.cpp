@@ -69,8 +69,8 @@ class WaterMeshDataset final : public GDALDataset
 
     /* Computed blocks, least recently used first out once their size
      * passes m_nCacheMax (WATERMESH_CACHE_MAX, MB): memory is bounded by
-     * that plus the blocks a reader holds, not by the scene. Polygon counts
-     * of every computed block stay (a few bytes each). */
+     * that plus the blocks a reader holds, not by the scene. Polygon and
+     * triangle counts of every computed block stay (a few bytes each). */
     using BlockKey = std::pair<int64_t, int64_t>;
     struct CacheEntry
     {
@@ -80,7 +80,7 @@ class WaterMeshDataset final : public GDALDataset
     };
     std::map<BlockKey, CacheEntry> m_oCache;
     std::map<uint64_t, BlockKey> m_oByAge;
-    std::map<BlockKey, size_t> m_oCounts;
+    std::map<BlockKey, std::pair<size_t, size_t>> m_oCounts;
     size_t m_nCacheBytes = 0, m_nCacheMax = 0;
     uint64_t m_nTick = 0;
 
@@ -126,6 +126,7 @@ class WaterMeshLayer final : public OGRLayer,
 {
     WaterMeshDataset *m_poDS;
     bool m_bMesh;
+    bool m_bPerTriangle; /* mesh, MESH_GEOMETRY=TRIANGLES */
     OGRFeatureDefn *m_poDefn;
     /* a read walks the blocks (for the filter's envelope) a chunk at a
      * time: the chunk's blocks (bx, by pairs) and their results */
@@ -133,7 +134,16 @@ class WaterMeshLayer final : public OGRLayer,
     bool m_bDone = false;
     std::vector<int64_t> m_anBlocks;
     std::vector<ResultPtr> m_aoChunk;
-    size_t m_iBlock = 0, m_iPoly = 0;
+    /* the next feature: block of the chunk, item of the block (polygon,
+     * or triangle), and the polygon of a triangle */
+    size_t m_iBlock = 0, m_iItem = 0, m_iPoly = 0;
+
+    /** Features of block result r: its polygons, or triangles. */
+    size_t Items(const wm_block_result *r) const
+    {
+        return m_bPerTriangle ? (r->poly_tri ? r->poly_tri[r->npolys] : 0)
+                              : r->npolys;
+    }
 
   public:
     WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh);
@@ -149,7 +159,7 @@ class WaterMeshLayer final : public OGRLayer,
         m_bDone = false;
         m_anBlocks.clear();
         m_aoChunk.clear();
-        m_iBlock = m_iPoly = 0;
+        m_iBlock = m_iItem = m_iPoly = 0;
     }
     OGRFeature *GetNextRawFeature();
     DEFINE_GET_NEXT_FEATURE_THROUGH_RAW(WaterMeshLayer)
@@ -228,7 +238,7 @@ static size_t result_bytes(const wm_block_result *r)
 void WaterMeshDataset::Remember(const ResultPtr &r)
 {
     const BlockKey key{r->bx, r->by};
-    m_oCounts[key] = r->npolys;
+    m_oCounts[key] = {r->npolys, r->poly_tri ? r->poly_tri[r->npolys] : 0};
     auto it = m_oCache.find(key);
     if (it != m_oCache.end())
     {
@@ -330,6 +340,8 @@ bool WaterMeshDataset::Fetch(const int64_t *blocks, size_t n,
 
 WaterMeshLayer::WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh)
     : m_poDS(poDS), m_bMesh(bMesh),
+      m_bPerTriangle(bMesh &&
+                     poDS->m_poScene->params.mesh_form == WM_MESH_TRIANGLES),
       m_poDefn(new OGRFeatureDefn(bMesh ? "mesh" : "water"))
 {
     SetDescription(m_poDefn->GetName());
@@ -337,12 +349,12 @@ WaterMeshLayer::WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh)
     m_poDefn->SetGeomType(bMesh ? WMMeshType(poDS->m_poScene) : wkbPolygon);
     m_poDefn->GetGeomFieldDefn(0)->SetSpatialRef(
         OGRSpatialReference::FromHandle(poDS->m_poScene->hSRS));
-    OGRFieldDefn oBX("block_x", OFTInteger), oBY("block_y", OFTInteger);
-    m_poDefn->AddFieldDefn(&oBX);
-    m_poDefn->AddFieldDefn(&oBY);
-    OGRFieldDefn oLast(bMesh ? "triangles" : "area",
-                       bMesh ? OFTInteger : OFTReal);
-    m_poDefn->AddFieldDefn(&oLast);
+    const WMField *fields = WMLayerFields(poDS->m_poScene, bMesh);
+    for (const WMField *f = fields; f->name; f++)
+    {
+        OGRFieldDefn o(f->name, f->type);
+        m_poDefn->AddFieldDefn(&o);
+    }
 }
 
 WaterMeshLayer::~WaterMeshLayer()
@@ -382,7 +394,7 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
                 size_t n = 0;
                 m_anBlocks.resize(2 * k);
                 m_aoChunk.clear();
-                m_iBlock = m_iPoly = 0;
+                m_iBlock = m_iItem = m_iPoly = 0;
                 if (!WMBlockWalkNext(&m_poWalk->w, m_anBlocks.data(), k, &n) ||
                     n == 0 || !m_poDS->Fetch(m_anBlocks.data(), n, &m_aoChunk))
                 {
@@ -392,37 +404,31 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
                     return nullptr;
                 }
             }
-            if (m_iPoly < m_aoChunk[m_iBlock]->npolys)
+            if (m_iItem < Items(m_aoChunk[m_iBlock].get()))
                 break;
             m_iBlock++;
-            m_iPoly = 0;
+            m_iItem = m_iPoly = 0;
         }
         const wm_block_result *r = m_aoChunk[m_iBlock].get();
-        const size_t p = m_iPoly++;
+        const size_t item = m_iItem++;
+        if (m_bPerTriangle)
+            while (r->poly_tri[m_iPoly + 1] <= item)
+                m_iPoly++;
+        else
+            m_iPoly = item;
         const WMScene *s = m_poDS->m_poScene;
-        auto poFeature = new OGRFeature(m_poDefn);
-        /* stable FID: block's place in the scene grid, polygon index */
+        /* stable FID: the block's place in the scene grid, then the
+         * polygon's (or triangle's) index in the block */
         const GIntBig blk =
             (r->by - s->core.by0) * s->core.nbx + (r->bx - s->core.bx0);
-        poFeature->SetFID((blk << 24) + static_cast<GIntBig>(p));
-        poFeature->SetField(0, static_cast<int>(r->bx));
-        poFeature->SetField(1, static_cast<int>(r->by));
-        OGRGeometryH hGeom;
-        if (m_bMesh)
-        {
-            poFeature->SetField(
-                2, static_cast<int>(r->poly_tri[p + 1] - r->poly_tri[p]));
-            hGeom = WMMeshGeometry(s, r, p);
-        }
-        else
-        {
-            poFeature->SetField(2, WMPolygonArea(s, r, p));
-            hGeom = WMPolygonGeometry(s, r, p);
-        }
-        OGRGeometry *poGeom = OGRGeometry::FromHandle(hGeom);
-        poGeom->assignSpatialReference(
+        auto poFeature = OGRFeature::FromHandle(
+            WMNewFeature(s, OGRFeatureDefn::ToHandle(m_poDefn), m_bMesh, r,
+                         m_iPoly, m_bPerTriangle ? item : SIZE_MAX));
+        poFeature->SetFID(m_bPerTriangle
+                              ? (blk << 32) + static_cast<GIntBig>(item)
+                              : (blk << 24) + static_cast<GIntBig>(item));
+        poFeature->GetGeometryRef()->assignSpatialReference(
             m_poDefn->GetGeomFieldDefn(0)->GetSpatialRef());
-        poFeature->SetGeometryDirectly(poGeom);
         return poFeature;
     }
     catch (const std::exception &e)
@@ -461,8 +467,12 @@ GIntBig WaterMeshLayer::GetFeatureCount(int bForce)
                 }
             ok = m_poDS->Fetch(todo.data(), todo.size() / 2, nullptr);
             for (size_t i = 0; ok && i < n; i++)
-                total += static_cast<GIntBig>(
-                    m_poDS->m_oCounts[{chunk[2 * i], chunk[2 * i + 1]}]);
+            {
+                const auto &c =
+                    m_poDS->m_oCounts[{chunk[2 * i], chunk[2 * i + 1]}];
+                total +=
+                    static_cast<GIntBig>(m_bPerTriangle ? c.second : c.first);
+            }
         }
         return ok ? total : -1;
     }
@@ -713,8 +723,9 @@ static const char OPEN_OPTIONS[] =
     "  <Option name='MESH_GEOMETRY' type='string-select' "
     "default='MULTIPOLYGON' description='Geometry of a mesh feature: "
     "MULTIPOLYGON (its triangles, sharing edges: a set of triangles, not a "
-    "valid MultiPolygon) or TIN (a TIN of Triangles)'>"
-    "    <Value>MULTIPOLYGON</Value><Value>TIN</Value>"
+    "valid MultiPolygon), TIN (a TIN of Triangles) or TRIANGLES (one "
+    "Polygon feature per triangle)'>"
+    "    <Value>MULTIPOLYGON</Value><Value>TIN</Value><Value>TRIANGLES</Value>"
     "  </Option>"
     "</OpenOptionList>";
 

@@ -161,13 +161,16 @@ static int params_parse(CSLConstList opts, WMParams *p)
     }
     const char *g = CSLFetchNameValueDef(opts, "MESH_GEOMETRY", "MULTIPOLYGON");
     if (EQUAL(g, "MULTIPOLYGON"))
-        p->mesh_tin = FALSE;
+        p->mesh_form = WM_MESH_MULTIPOLYGON;
     else if (EQUAL(g, "TIN"))
-        p->mesh_tin = TRUE;
+        p->mesh_form = WM_MESH_TIN;
+    else if (EQUAL(g, "TRIANGLES"))
+        p->mesh_form = WM_MESH_TRIANGLES;
     else
     {
         CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: MESH_GEOMETRY=%s: expected MULTIPOLYGON or TIN.",
+                 "WATERMESH: MESH_GEOMETRY=%s: expected MULTIPOLYGON, TIN or "
+                 "TRIANGLES.",
                  g);
         return FALSE;
     }

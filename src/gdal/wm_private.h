@@ -23,10 +23,18 @@ extern const char *const WM_OPTION_NAMES[];
 /** DEVICE: where the field is computed. */
 typedef enum
 {
-    WM_DEVICE_AUTO = 0, /* a GPU through OpenCL if there is one, else C */
+    WM_DEVICE_AUTO = 0, /* C, or WATERMESH_OPENCL_DEVICE when set */
     WM_DEVICE_CPU,      /* the C path */
     WM_DEVICE_OPENCL    /* OpenCL, an error when there is no device */
 } WMDeviceKind;
+
+/** MESH_GEOMETRY: the form of a mesh feature. */
+typedef enum
+{
+    WM_MESH_MULTIPOLYGON = 0, /* a polygon's triangles, one MultiPolygon */
+    WM_MESH_TIN,              /* a polygon's triangles, one TIN */
+    WM_MESH_TRIANGLES         /* one Polygon feature per triangle */
+} WMMeshForm;
 
 /** Parsed, validated parameters. */
 typedef struct
@@ -41,7 +49,7 @@ typedef struct
     int heuristic;           /* HEURISTIC, a wm_heuristic (METHOD=PAPER) */
     double merge;            /* MERGE_DISTANCE, m; 0: off */
     double min_feature_area; /* MIN_FEATURE_AREA, m^2; 0: off */
-    int mesh_tin;            /* MESH_GEOMETRY=TIN (else MULTIPOLYGON) */
+    WMMeshForm mesh_form;    /* MESH_GEOMETRY */
     WMDeviceKind device;
     int num_threads;
     char *target_srs; /* or NULL */
@@ -173,9 +181,32 @@ OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
                                size_t p);
 OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
                             size_t p);
-/** The mesh layer's geometry type: wkbMultiPolygon, or wkbTIN under
- *  MESH_GEOMETRY=TIN. */
+/** Triangle t of a block result as a Polygon (MESH_GEOMETRY=TRIANGLES). */
+OGRGeometryH WMTriangleGeometry(const WMScene *s, const wm_block_result *r,
+                                size_t t);
+/** The mesh layer's geometry type: wkbMultiPolygon, wkbTIN, or wkbPolygon
+ *  under MESH_GEOMETRY=TRIANGLES. */
 OGRwkbGeometryType WMMeshType(const WMScene *s);
+
+/** An attribute field of an output layer. */
+typedef struct
+{
+    const char *name;
+    OGRFieldType type;
+} WMField;
+
+/** The fields of the water layer (mesh FALSE) or the mesh layer, ending
+ *  with {NULL}: block_x, block_y, area (water) or triangles (mesh, but
+ *  not under MESH_GEOMETRY=TRIANGLES), polygon (the polygon's index in its
+ *  block: block_x, block_y, polygon name a water polygon and its mesh). */
+const WMField *WMLayerFields(const WMScene *s, int mesh);
+
+/** A feature of layer definition defn with polygon p of block result r
+ *  (mesh FALSE: water) or its mesh, or with triangle t (t != SIZE_MAX,
+ *  MESH_GEOMETRY=TRIANGLES); the fields of WMLayerFields that defn has are
+ *  set. Caller destroys it. */
+OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
+                         const wm_block_result *r, size_t p, size_t t);
 /** Polygon area in m^2 (exact lattice area, then scaled). */
 double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p);
 

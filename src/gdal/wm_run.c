@@ -344,7 +344,27 @@ OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
 
 OGRwkbGeometryType WMMeshType(const WMScene *s)
 {
-    return s->params.mesh_tin ? wkbTIN : wkbMultiPolygon;
+    static const OGRwkbGeometryType types[] = {wkbMultiPolygon, wkbTIN,
+                                               wkbPolygon};
+    return types[s->params.mesh_form];
+}
+
+/* Triangle t as a geometry of type `type` (wkbPolygon or wkbTriangle):
+ * one closed counter-clockwise ring. */
+static OGRGeometryH triangle(const WMScene *s, const wm_block_result *r,
+                             size_t t, OGRwkbGeometryType type)
+{
+    OGRGeometryH tri = OGR_G_CreateGeometry(type);
+    OGRGeometryH ring = OGR_G_CreateGeometry(wkbLinearRing);
+    OGR_G_SetPointCount(ring, 4); /* one allocation */
+    for (int k = 0; k <= 3; k++)
+    {
+        double x, y;
+        world(s, r, r->rings.pts[r->tris[3 * t + (size_t)(k % 3)]], &x, &y);
+        OGR_G_SetPoint_2D(ring, k, x, y);
+    }
+    OGR_G_AddGeometryDirectly(tri, ring);
+    return tri;
 }
 
 /* Polygon p's triangles: a MultiPolygon of triangles sharing edges (not an
@@ -352,23 +372,72 @@ OGRwkbGeometryType WMMeshType(const WMScene *s)
 OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
                             size_t p)
 {
-    const int tin = s->params.mesh_tin;
+    const int tin = s->params.mesh_form == WM_MESH_TIN;
     OGRGeometryH g = OGR_G_CreateGeometry(tin ? wkbTIN : wkbMultiPolygon);
     for (size_t t = r->poly_tri[p]; t < r->poly_tri[p + 1]; t++)
-    {
-        OGRGeometryH tri = OGR_G_CreateGeometry(tin ? wkbTriangle : wkbPolygon);
-        OGRGeometryH ring = OGR_G_CreateGeometry(wkbLinearRing);
-        OGR_G_SetPointCount(ring, 4); /* one allocation */
-        for (int k = 0; k <= 3; k++)
-        {
-            double x, y;
-            world(s, r, r->rings.pts[r->tris[3 * t + (size_t)(k % 3)]], &x, &y);
-            OGR_G_SetPoint_2D(ring, k, x, y);
-        }
-        OGR_G_AddGeometryDirectly(tri, ring);
-        OGR_G_AddGeometryDirectly(g, tri);
-    }
+        OGR_G_AddGeometryDirectly(
+            g, triangle(s, r, t, tin ? wkbTriangle : wkbPolygon));
     return g;
+}
+
+OGRGeometryH WMTriangleGeometry(const WMScene *s, const wm_block_result *r,
+                                size_t t)
+{
+    return triangle(s, r, t, wkbPolygon);
+}
+
+const WMField *WMLayerFields(const WMScene *s, int mesh)
+{
+    static const WMField water[] = {{"block_x", OFTInteger},
+                                    {"block_y", OFTInteger},
+                                    {"area", OFTReal},
+                                    {"polygon", OFTInteger},
+                                    {NULL, OFTInteger}};
+    static const WMField polys[] = {{"block_x", OFTInteger},
+                                    {"block_y", OFTInteger},
+                                    {"triangles", OFTInteger},
+                                    {"polygon", OFTInteger},
+                                    {NULL, OFTInteger}};
+    static const WMField tris[] = {{"block_x", OFTInteger},
+                                   {"block_y", OFTInteger},
+                                   {"polygon", OFTInteger},
+                                   {NULL, OFTInteger}};
+    if (!mesh)
+        return water;
+    return s->params.mesh_form == WM_MESH_TRIANGLES ? tris : polys;
+}
+
+static void set_int(OGRFeatureH f, const char *name, GIntBig v)
+{
+    const int i = OGR_F_GetFieldIndex(f, name);
+    if (i >= 0)
+        OGR_F_SetFieldInteger64(f, i, v);
+}
+
+OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
+                         const wm_block_result *r, size_t p, size_t t)
+{
+    OGRFeatureH f = OGR_F_Create(defn);
+    set_int(f, "block_x", r->bx);
+    set_int(f, "block_y", r->by);
+    set_int(f, "polygon", (GIntBig)p);
+    OGRGeometryH g;
+    if (!mesh)
+    {
+        const int ia = OGR_F_GetFieldIndex(f, "area");
+        if (ia >= 0)
+            OGR_F_SetFieldDouble(f, ia, WMPolygonArea(s, r, p));
+        g = WMPolygonGeometry(s, r, p);
+    }
+    else if (t != SIZE_MAX)
+        g = WMTriangleGeometry(s, r, t);
+    else
+    {
+        set_int(f, "triangles", (GIntBig)(r->poly_tri[p + 1] - r->poly_tri[p]));
+        g = WMMeshGeometry(s, r, p);
+    }
+    OGR_F_SetGeometryDirectly(f, g);
+    return f;
 }
 
 double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p)
@@ -419,42 +488,30 @@ typedef struct
     OGRLayerH water, mesh;
 } gen_sink;
 
-static void set_int(OGRFeatureH f, const char *name, GIntBig v)
+/* Writes the feature of polygon p (or triangle t) to layer l. */
+static int put(const gen_sink *g, OGRLayerH l, int mesh,
+               const wm_block_result *res, size_t p, size_t t)
 {
-    const int i = OGR_F_GetFieldIndex(f, name);
-    if (i >= 0)
-        OGR_F_SetFieldInteger64(f, i, v);
+    OGRFeatureH f = WMNewFeature(g->s, OGR_L_GetLayerDefn(l), mesh, res, p, t);
+    const int ok = OGR_L_CreateFeature(l, f) == OGRERR_NONE;
+    OGR_F_Destroy(f);
+    return ok;
 }
 
 static int write_block(void *user, wm_block_result *res)
 {
     gen_sink *g = user;
+    const int per_triangle = g->s->params.mesh_form == WM_MESH_TRIANGLES;
     int ok = TRUE;
     for (size_t p = 0; ok && p < res->npolys; p++)
     {
         if (g->water)
-        {
-            OGRFeatureH f = OGR_F_Create(OGR_L_GetLayerDefn(g->water));
-            set_int(f, "block_x", res->bx);
-            set_int(f, "block_y", res->by);
-            const int ia = OGR_F_GetFieldIndex(f, "area");
-            if (ia >= 0)
-                OGR_F_SetFieldDouble(f, ia, WMPolygonArea(g->s, res, p));
-            OGR_F_SetGeometryDirectly(f, WMPolygonGeometry(g->s, res, p));
-            ok = OGR_L_CreateFeature(g->water, f) == OGRERR_NONE;
-            OGR_F_Destroy(f);
-        }
-        if (ok && g->mesh)
-        {
-            OGRFeatureH f = OGR_F_Create(OGR_L_GetLayerDefn(g->mesh));
-            set_int(f, "block_x", res->bx);
-            set_int(f, "block_y", res->by);
-            set_int(f, "triangles",
-                    (GIntBig)(res->poly_tri[p + 1] - res->poly_tri[p]));
-            OGR_F_SetGeometryDirectly(f, WMMeshGeometry(g->s, res, p));
-            ok = OGR_L_CreateFeature(g->mesh, f) == OGRERR_NONE;
-            OGR_F_Destroy(f);
-        }
+            ok = put(g, g->water, FALSE, res, p, SIZE_MAX);
+        if (ok && g->mesh && !per_triangle)
+            ok = put(g, g->mesh, TRUE, res, p, SIZE_MAX);
+        for (size_t t = res->poly_tri[p];
+             ok && g->mesh && per_triangle && t < res->poly_tri[p + 1]; t++)
+            ok = put(g, g->mesh, TRUE, res, p, t);
     }
     if (!ok)
         CPLError(CE_Failure, CPLE_AppDefined,
