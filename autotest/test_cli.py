@@ -350,18 +350,26 @@ def _leaf_triangles(g):
     return sum(_leaf_triangles(g.GetGeometryRef(i)) for i in range(g.GetGeometryCount()))
 
 
-@pytest.mark.parametrize('ext,mesh_file', [('gpkg', 'out.gpkg'), ('fgb', 'out_mesh.fgb'),
-                                           ('shp', 'out_mesh.shp')])
+MESH_FILES = [('gpkg', 'out.gpkg'), ('fgb', 'out_mesh.fgb'), ('shp', 'out_mesh.shp')]
+
+
+def cli_mesh_layer(wm, simple_args, tmp_dir, form, ext, mesh_file):
+    """Runs the CLI with -mesh_geometry form to out.<ext> in a folder of its
+    own; returns the mesh file's dataset and mesh layer."""
+    out = os.path.join(tmp_dir, '%s_%s' % (form, ext))
+    os.mkdir(out)
+    p = wm.cli(simple_args + ['-mesh_geometry', form, os.path.join(out, 'out.' + ext)])
+    assert p.returncode == 0, p.stderr
+    ds = gdal.OpenEx(os.path.join(out, mesh_file), gdal.OF_VECTOR)
+    return ds, ds.GetLayerByName('mesh') if ext == 'gpkg' else ds.GetLayer(0)
+
+
+@pytest.mark.parametrize('ext,mesh_file', MESH_FILES)
 def test_mesh_geometry_tin_reads_back(wm, simple_options, simple_args, tmp_dir, ext, mesh_file):
     """-mesh_geometry TIN to GeoPackage, FlatGeobuf and Shapefile (a
     MultiPatch): every feature reads back with every triangle, as a TIN
     (GeoPackage, FlatGeobuf) or as GDAL reads a MultiPatch."""
-    out = os.path.join(tmp_dir, 'tin_' + ext)
-    os.mkdir(out)
-    p = wm.cli(simple_args + ['-mesh_geometry', 'TIN', os.path.join(out, 'out.' + ext)])
-    assert p.returncode == 0, p.stderr
-    ds = gdal.OpenEx(os.path.join(out, mesh_file), gdal.OF_VECTOR)
-    lyr = ds.GetLayerByName('mesh') if ext == 'gpkg' else ds.GetLayer(0)
+    ds, lyr = cli_mesh_layer(wm, simple_args, tmp_dir, 'TIN', ext, mesh_file)
     ref = wm.run(simple_options).mesh
     want = sum(f.fields['triangles'] for f in ref)
     got = 0
@@ -376,19 +384,13 @@ def test_mesh_geometry_tin_reads_back(wm, simple_options, simple_args, tmp_dir, 
     assert got == want > 0
 
 
-@pytest.mark.parametrize('ext,mesh_file', [('gpkg', 'out.gpkg'), ('fgb', 'out_mesh.fgb'),
-                                           ('shp', 'out_mesh.shp')])
+@pytest.mark.parametrize('ext,mesh_file', MESH_FILES)
 def test_mesh_geometry_triangles_reads_back(wm, simple_options, simple_args, tmp_dir, ext,
                                             mesh_file):
     """-mesh_geometry TRIANGLES to GeoPackage, FlatGeobuf and Shapefile: one
     valid Polygon per triangle, as many as the triangles the default form
     counts, each polygon's share under its key."""
-    out = os.path.join(tmp_dir, 'tri_' + ext)
-    os.mkdir(out)
-    p = wm.cli(simple_args + ['-mesh_geometry', 'TRIANGLES', os.path.join(out, 'out.' + ext)])
-    assert p.returncode == 0, p.stderr
-    ds = gdal.OpenEx(os.path.join(out, mesh_file), gdal.OF_VECTOR)
-    lyr = ds.GetLayerByName('mesh') if ext == 'gpkg' else ds.GetLayer(0)
+    ds, lyr = cli_mesh_layer(wm, simple_args, tmp_dir, 'TRIANGLES', ext, mesh_file)
     ref = wm.run(simple_options).mesh
     want = {}
     for f in ref:
