@@ -18,6 +18,30 @@ if [ -n "$missing" ]; then
   # shellcheck disable=SC2086
   apt-get install -y -qq --no-install-recommends $missing
 fi
+# GDAL's OGR conformance program, test_ogrsf, which `make check` builds and
+# runs on the driver: three files of Debian's gdal source package, of the
+# installed libgdal's version (a deb-src entry for the archive apt already
+# uses is added when there is none)
+T=tools/test_ogrsf
+if [ ! -f "$T/test_ogrsf.cpp" ]; then
+  if ! grep -rqsE '^(Types:.*deb-src|deb-src )' /etc/apt/sources.list /etc/apt/sources.list.d/; then
+    d=/etc/apt/sources.list.d
+    cat "$d"/*.sources 2>/dev/null | sed 's/^Types: deb$/Types: deb-src/' >/tmp/wm-src.$$
+    mv /tmp/wm-src.$$ "$d/watermesh-deb-src.sources"
+    if [ -f /etc/apt/sources.list ]; then
+      sed -n 's/^deb /deb-src /p' /etc/apt/sources.list >"$d/watermesh-deb-src.list"
+    fi
+    apt-get update -qq
+  fi
+  src=$(mktemp -d)
+  chown _apt "$src" 2>/dev/null || true
+  (cd "$src" && apt-get source -qq --download-only \
+    "gdal=$(dpkg-query -W -f='${source:Version}' libgdal-dev)")
+  mkdir -p "$T"
+  tar -xJf "$src"/gdal_*.orig.tar.xz -C "$T" --no-same-owner --strip-components=2 --wildcards \
+    '*/apps/test_ogrsf.cpp' '*/apps/commonutils.cpp' '*/apps/commonutils.h'
+  rm -rf "$src"
+fi
 [ -x configure ] || autoreconf -fi
 [ -f Makefile ] || ./configure ${CONFIGURE_FLAGS:-}
 make -j"$(nproc)"
