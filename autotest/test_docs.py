@@ -150,3 +150,54 @@ def test_documented_fields_are_the_layers_fields(wm, simple_options, form):
     if form == 'TRIANGLES':
         want = {w for w in want if w[0] != 'triangles'} | {w for w in have if w[0] == 'triangles'}
     assert have == want, (sorted(have), sorted(want))
+
+
+def cli_stats(wm, path, *extra):
+    """-stats output of a run of the CLI on an OSM extract."""
+    out = os.path.join(os.environ.get('TMPDIR', '/tmp'), 'wm_docs_%d.gpkg' % os.getpid())
+    p = wm.cli(['-q', '-overwrite', '-stats', '-rivers', path, '-rivers_layer', 'rivers',
+                '-lakes', path, '-lakes_layer', 'lakes'] + list(extra) + [out])
+    assert p.returncode == 0, p.stderr
+    os.unlink(out)
+    return p.stdout
+
+
+def counts(stats):
+    m = re.search(r'polygons (\d+), output vertices (\d+), triangles (\d+)', stats)
+    v = re.search(r'^V = ([0-9.]+)', stats, re.M).group(1)
+    return [int(x) for x in m.groups()] + [v]
+
+
+def marked(text, name):
+    begin, end = '<!-- doc_figures:%s -->\n' % name, '<!-- /doc_figures:%s -->' % name
+    return text[text.index(begin) + len(begin):text.index(end)]
+
+
+def test_readme_figures_are_this_builds(wm):
+    """README's results table and -stats example (tools/doc_figures.py)
+    quote the counts this build gives: output vertices, triangles, V."""
+    readme = read('README.md')
+    table = marked(readme, 'results')
+    example = counts(marked(readme, 'stats'))
+    for name, f in (('Andorra', 'osm_andorra_2023.gpkg'),
+                    ('Liechtenstein', 'osm_liechtenstein_2013.gpkg')):
+        got = counts(cli_stats(wm, os.path.join(REPO_DIR, 'data', 'osm', f)))
+        row = re.search(r'^\| %s .*$' % name, table, re.M).group(0).split(' | ')
+        assert [int(row[-3].replace(',', '')), int(row[-2].replace(',', '')),
+                row[-1].rstrip(' |')] == got[1:], (row, got)
+        if name == 'Andorra':
+            assert example == got, (example, got)
+
+
+def test_methods_figures_are_this_builds(wm):
+    """docs/methods.md's Andorra CONTOUR rows quote this build's vertices and
+    V at each PIXEL_SIZE."""
+    text = marked(read('docs', 'methods.md'), 'methods')
+    andorra = text[text.index('### Andorra'):]
+    path = os.path.join(REPO_DIR, 'data', 'osm', 'osm_andorra_2023.gpkg')
+    for px in ('0.5', '1', '2'):
+        row = re.search(r'^\| %s \| CONTOUR \| (\d+) \| ([0-9.]+) \|' % re.escape(px),
+                        andorra, re.M)
+        assert row, px
+        got = counts(cli_stats(wm, path, '-pixel_size', px, '-simplify', px))
+        assert [int(row.group(1)), row.group(2)] == [got[1], got[3]], (px, row.group(0), got)
