@@ -252,5 +252,35 @@ int main(void)
     TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
     wm_rings_free(&r1);
     wm_scene_free(&s);
+    /* An L-shaped lake whose inner corner is the sample (60, 60), and a
+     * river 0.94 px wide that cuts off a land triangle of legs 0.15 and
+     * 0.30 px at that corner: the triangle touches the corner's cell only
+     * along the lake's edges, which are water, and the cell's samples give
+     * a segment 0.5 px from it, too far for the crease recovery. Its
+     * corners, off the cell's contour, make the cell ambiguous. */
+    su_init(&s, 128);
+    const double ell[] = {40, 40, 80, 40, 80, 60, 60, 60, 60, 80, 40, 80};
+    const int nell = 6;
+    su_lake(&s, ell, &nell, 1);
+    const double ux = 2.4 / hypot(2.4, 1.2), uy = -1.2 / hypot(2.4, 1.2);
+    const double r = 0.47; /* half-width: the upper bank through (60,
+                            * 61.2) and (62.4, 60) */
+    const double cut[] = {60 - 20 * ux + uy * r, 61.2 - 20 * uy - ux * r,
+                          60 + 24 * ux + uy * r, 61.2 + 24 * uy - ux * r};
+    su_river(&s, cut, 2, r);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 0, &r0), WM_OK, "extract from the samples alone");
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_EQ(count_sign(&r0, 0), 0, "samples alone: the land triangle lost");
+    TAP_EQ(count_sign(&r1, 0), 1, "exact search: the land triangle kept");
+    const double lx = 62.4 - 2 * r / -uy, ly = 61.2 - 2 * r / ux;
+    TAP_OK(vertex_near(&r1, 60 * WM_Q, ly * WM_Q, 4.0) &&
+               vertex_near(&r1, lx * WM_Q, 60 * WM_Q, 4.0),
+           "its corners on the lake's edges within 1/64 px (%.3f, %.3f)", lx,
+           ly);
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    wm_rings_free(&r0);
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
     return TAP_DONE();
 }

@@ -501,22 +501,58 @@ static int buried(wm_probe *probe, wm_pt p)
     return wm_probe_distance(probe, p.x, p.y, 2.0) < -1.0;
 }
 
-/* Whether the four samples of cell (c, r) are of one class. */
-static int uniform_cell(const wm_field *f, int32_t c, int32_t r)
+/* Squared distance from (x, y) to segment [a, b]. */
+static double seg_dist2(double x, double y, double ax, double ay, double bx,
+                        double by)
 {
+    const double ux = bx - ax, uy = by - ay, l2 = ux * ux + uy * uy;
+    double t = l2 > 0 ? ((x - ax) * ux + (y - ay) * uy) / l2 : 0;
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    const double dx = ax + t * ux - x, dy = ay + t * uy - y;
+    return dx * dx + dy * dy;
+}
+
+/* Whether corner p of the union lies farther than a quarter pixel from
+ * every segment the samples of its cell (c, r) give (crossings
+ * interpolated on the cell's sides; a saddle's two pairings both count):
+ * crease.c recovers a corner only that close to a segment. Such a cell
+ * is ambiguous: a cell of one class (an island or a pond smaller than a
+ * pixel), or a land triangle at a lake's inner corner that a sub-pixel
+ * river cuts off, touching the cell's sides only on the lake's boundary,
+ * which is water. */
+static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
+{
+    static const int cx[4] = {0, 1, 1, 0}, cy[4] = {0, 0, 1, 1};
     float v[4];
     wm_field_cell(f, c, r, v);
-    const int w = v[0] <= 0;
-    return (v[1] <= 0) == w && (v[2] <= 0) == w && (v[3] <= 0) == w;
+    double x[4], y[4];
+    int n = 0;
+    for (int a = 0; a < 4; a++)
+    {
+        const int b = (a + 1) & 3;
+        if ((v[a] <= 0) == (v[b] <= 0))
+            continue;
+        const double t = (double)v[a] / ((double)v[a] - (double)v[b]);
+        x[n] = (cx[a] + t * (cx[b] - cx[a])) * WM_Q;
+        y[n++] = (cy[a] + t * (cy[b] - cy[a])) * WM_Q;
+    }
+    const double px = p.x - (double)c * WM_Q, py = p.y - (double)r * WM_Q;
+    const double lim = (double)WM_Q / 4;
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; j < n; j++)
+            if (seg_dist2(px, py, x[i], y[i], x[j], y[j]) <= lim * lim)
+                return 0;
+    return 1;
 }
 
 /* Seeds the cells of the inputs smaller than two pixels: lake rings (the
  * runs of edges of a polygon that close) and river segments with their
  * radius, by their first point; the tips of thin caps; and the corners of
- * the union (probe->corner) in cells whose four samples are of one class,
- * which are ambiguous: the corner of an island smaller than a pixel that
+ * the union (probe->corner) off their cell's contour (off_contour), whose
+ * cells are ambiguous: the corner of an island smaller than a pixel that
  * several rivers enclose, or of a pond between banks, which no side of the
- * cell may cross. */
+ * cell may cross, or of a land triangle that touches the sides only where
+ * they are water. */
 static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
     const wm_scene *s = probe->s;
@@ -561,15 +597,15 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
     for (size_t i = 0; i < probe->ncorner; i++)
     {
         const wm_pt p = probe->corner[i];
-        if (uniform_cell(f, p.x / WM_Q, p.y / WM_Q) && !buried(probe, p) &&
+        if (off_contour(f, p.x / WM_Q, p.y / WM_Q, p) && !buried(probe, p) &&
             !add_seed(h, f, p.x, p.y, 1))
             return 0;
     }
     return 1;
 }
 
-/* Seeds the corners of the union in the cells ambiguous for other reasons
- * (h->cell, sorted): there a seed steers the subdivision to the corner (a
+/* Seeds the other corners of the union in the cells ambiguous for other
+ * reasons (h->cell, sorted): there a seed steers the subdivision to the corner (a
  * wedge tip the straight segment of a simple rectangle would cut);
  * crease.c recovers the corners of the other cells, where a seed would
  * not be read. */
@@ -581,7 +617,7 @@ static int steer_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
         const int32_t c = p.x / WM_Q, r = p.y / WM_Q;
         const uint64_t key = cell_key(f, c, r);
         const size_t k = lower_u64(h->cell, h->ncell, key);
-        if (k < h->ncell && h->cell[k] == key && !uniform_cell(f, c, r) &&
+        if (k < h->ncell && h->cell[k] == key && !off_contour(f, c, r, p) &&
             !buried(probe, p) && !add_seed(h, f, p.x, p.y, 0))
             return 0;
     }
