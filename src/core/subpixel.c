@@ -605,10 +605,9 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
 }
 
 /* Seeds the other corners of the union in the cells ambiguous for other
- * reasons (h->cell, sorted): there a seed steers the subdivision to the corner (a
- * wedge tip the straight segment of a simple rectangle would cut);
- * crease.c recovers the corners of the other cells, where a seed would
- * not be read. */
+ * reasons (h->cell, sorted): there a seed steers the subdivision to the corner
+ * (a wedge tip the straight segment of a simple rectangle would cut); crease.c
+ * recovers the corners of the other cells, where a seed would not be read. */
 static int steer_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
     for (size_t i = 0; i < probe->ncorner; i++)
