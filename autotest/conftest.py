@@ -201,7 +201,8 @@ def run_vector(options, path='WATERMESH:', spat=None, layers=('water', 'mesh'), 
 # ----------------------------------------------------------------------------
 
 CLI_OPTION_NAMES = ('rivers', 'rivers_layer', 'rivers_where', 'lakes', 'lakes_layer',
-                    'lakes_where', 'width', 'width_field', 'pixel_size', 'block_size',
+                    'lakes_where', 'width', 'width_field', 'width_by_class', 'pixel_size',
+                    'block_size',
                     'simplify', 'method', 'heuristic', 'merge_distance', 'device',
                     'num_threads', 'target_srs', 'min_feature_area', 'mesh_geometry')
 

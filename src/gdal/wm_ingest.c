@@ -472,25 +472,242 @@ static int thin_dense(builder *b)
     return TRUE;
 }
 
-/* Parses a width value: a number, optionally followed by "m" or "ft". */
-static int parse_width(const char *s, double *w)
+/* A number and its unit at *s ("2.5", "8 ft", "3m"), in metres; *s moves
+ * past them. */
+static int width_number(const char **s, double *w)
 {
+    static const struct
+    {
+        const char *name;
+        double m;
+    } units[] = {{"metres", 1},    {"meters", 1},  {"metre", 1},
+                 {"meter", 1},     {"m", 1},       {"feet", 0.3048},
+                 {"foot", 0.3048}, {"ft", 0.3048}, {"'", 0.3048}};
     char *end = NULL;
-    while (*s && isspace((unsigned char)*s))
-        s++;
-    const double v = CPLStrtod(s, &end);
-    if (end == s || !isfinite(v))
+    const double v = CPLStrtod(*s, &end);
+    if (end == *s || !isfinite(v))
         return FALSE;
-    while (*end && isspace((unsigned char)*end))
+    while (isspace((unsigned char)*end))
         end++;
     double f = 1.0;
-    if (EQUAL(end, "ft") || EQUAL(end, "feet") || EQUAL(end, "'"))
-        f = 0.3048;
-    else if (*end && !EQUAL(end, "m") && !EQUAL(end, "meters") &&
-             !EQUAL(end, "metres"))
-        return FALSE;
+    for (size_t i = 0; i < sizeof units / sizeof *units; i++)
+        if (EQUALN(end, units[i].name, strlen(units[i].name)))
+        {
+            f = units[i].m;
+            end += strlen(units[i].name);
+            break;
+        }
+    while (isspace((unsigned char)*end))
+        end++;
+    *s = end;
     *w = v * f;
-    return *w > 0;
+    return TRUE;
+}
+
+/* One width: a number with an optional unit, "~" before it (about), or a
+ * range "5-8" (its mean). */
+static int width_range(const char *s, double *w)
+{
+    while (isspace((unsigned char)*s) || *s == '~')
+        s++;
+    double a, b;
+    if (!width_number(&s, &a))
+        return FALSE;
+    if (*s == '-')
+    {
+        s++;
+        while (isspace((unsigned char)*s))
+            s++;
+        if (!width_number(&s, &b))
+            return FALSE;
+        a = (a + b) / 2;
+    }
+    *w = a;
+    return *s == '\0' && a > 0;
+}
+
+/* Parses a width value as OSM writes them: a number ("12", "2.5",
+ * decimal comma "1,5"), with a unit (m, metres, ft, feet, '), about
+ * ("~5"), a range ("5-8": the mean) or a list ("3;4": the largest). */
+static int parse_width(const char *text, double *w)
+{
+    char buf[128];
+    if (strlen(text) >= sizeof buf)
+        return FALSE;
+    strcpy(buf, text);
+    char *comma = strchr(buf, ',');
+    if (comma && !strchr(buf, '.') && !strchr(comma + 1, ','))
+        *comma = '.';
+    double best = 0;
+    char *save = NULL;
+    int n = 0;
+    for (char *part = strtok_r(buf, ";", &save); part;
+         part = strtok_r(NULL, ";", &save), n++)
+    {
+        double v;
+        if (!width_range(part, &v))
+            return FALSE;
+        best = v > best ? v : best;
+    }
+    *w = best;
+    return n > 0 && best > 0;
+}
+
+/* Where a river attribute comes from: a field, or a key of an hstore
+ * field (OSM's other_tags: "k"=>"v",...) for "field:key" when the layer
+ * has no field of that whole name. */
+typedef struct
+{
+    int field; /* -1: none */
+    const char *key;
+    OGRFieldType type;
+} attr_ref;
+
+static int attr_resolve(OGRLayerH h, const char *spec, const char *option,
+                        attr_ref *a)
+{
+    OGRFeatureDefnH d = OGR_L_GetLayerDefn(h);
+    a->key = NULL;
+    a->field = OGR_FD_GetFieldIndex(d, spec);
+    const char *colon = strchr(spec, ':');
+    if (a->field < 0 && colon)
+    {
+        char *name = CPLStrdup(spec);
+        name[colon - spec] = '\0';
+        a->field = OGR_FD_GetFieldIndex(d, name);
+        CPLFree(name);
+        a->key = colon + 1;
+    }
+    if (a->field < 0)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: RIVERS layer '%s' has no field '%s' (%s)%s.",
+                 OGR_L_GetName(h), spec, option,
+                 colon ? ", nor a field before the ':' to read an hstore key "
+                         "from"
+                       : "");
+        return FALSE;
+    }
+    a->type = OGR_Fld_GetType(OGR_FD_GetFieldDefn(d, a->field));
+    return TRUE;
+}
+
+/* Reads a quoted hstore token ("..." with \ escapes) at *pp into out (at
+ * most n bytes; *trunc set when it did not fit). */
+static int hstore_token(const char **pp, char *out, size_t n, int *trunc)
+{
+    const char *p = *pp;
+    size_t i = 0;
+    if (*p != '"')
+        return FALSE;
+    for (p++; *p && *p != '"'; p++)
+    {
+        if (*p == '\\' && p[1])
+            p++;
+        if (i + 1 < n)
+            out[i++] = *p;
+        else
+            *trunc = TRUE;
+    }
+    out[i] = '\0';
+    if (*p != '"')
+        return FALSE;
+    *pp = p + 1;
+    return TRUE;
+}
+
+/* The value of key in hstore text h, into buf; FALSE when absent, NULL or
+ * malformed. */
+static int hstore_get(const char *h, const char *key, char *buf, size_t n)
+{
+    const char *p = h;
+    for (;;)
+    {
+        while (*p == ' ' || *p == ',')
+            p++;
+        if (!*p)
+            return FALSE;
+        char k[256];
+        int ktrunc = FALSE, vtrunc = FALSE;
+        if (!hstore_token(&p, k, sizeof k, &ktrunc))
+            return FALSE;
+        while (*p == ' ')
+            p++;
+        if (p[0] != '=' || p[1] != '>')
+            return FALSE;
+        p += 2;
+        while (*p == ' ')
+            p++;
+        const int null = EQUALN(p, "NULL", 4);
+        if (null)
+            p += 4;
+        else if (!hstore_token(&p, buf, n, &vtrunc))
+            return FALSE;
+        if (!ktrunc && strcmp(k, key) == 0)
+            return !null && !vtrunc;
+    }
+}
+
+/* The attribute's text for feature f, or NULL when unset. */
+static const char *attr_text(OGRFeatureH f, const attr_ref *a, char *buf,
+                             size_t n)
+{
+    if (a->field < 0 || !OGR_F_IsFieldSetAndNotNull(f, a->field))
+        return NULL;
+    const char *v = OGR_F_GetFieldAsString(f, a->field);
+    if (!a->key)
+        return v;
+    return hstore_get(v, a->key, buf, n) ? buf : NULL;
+}
+
+/* Feature f's width from WIDTH_FIELD (a usable value), else from
+ * WIDTH_BY_CLASS (its class, else "*"), else WIDTH; *source says which
+ * (0, 1, 2). */
+static double river_width(OGRFeatureH f, const WMParams *p, const attr_ref *wf,
+                          const attr_ref *cf, int *source)
+{
+    char buf[256];
+    if (wf->field >= 0)
+    {
+        double v = 0;
+        int good = FALSE;
+        if (!wf->key && (wf->type == OFTReal || wf->type == OFTInteger ||
+                         wf->type == OFTInteger64))
+        {
+            good = OGR_F_IsFieldSetAndNotNull(f, wf->field);
+            v = OGR_F_GetFieldAsDouble(f, wf->field);
+            good = good && isfinite(v) && v > 0;
+        }
+        else
+        {
+            const char *t = attr_text(f, wf, buf, sizeof buf);
+            good = t && parse_width(t, &v);
+        }
+        if (good && v <= WM_MAX_WIDTH)
+        {
+            *source = 0;
+            return v;
+        }
+    }
+    const char *c = attr_text(f, cf, buf, sizeof buf);
+    int any = -1;
+    for (int i = 0; i < p->nclasses; i++)
+    {
+        if (c && EQUAL(c, p->class_names[i]))
+        {
+            *source = 1;
+            return p->class_widths[i];
+        }
+        if (EQUAL(p->class_names[i], "*"))
+            any = i;
+    }
+    if (any >= 0)
+    {
+        *source = 1;
+        return p->class_widths[any];
+    }
+    *source = 2;
+    return p->width;
 }
 
 static OGRGeometryH linear(OGRGeometryH g)
@@ -501,11 +718,12 @@ static OGRGeometryH linear(OGRGeometryH g)
 }
 
 static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
-                       OGRSpatialReferenceH dst, size_t *nvert)
+                       OGRSpatialReferenceH dst, size_t *nvert, size_t wsrc[3])
 {
     feat_ctx fc = {"RIVERS", h, 0, unit, NULL};
-    int ok = TRUE, wfield = -1;
+    int ok = TRUE;
     size_t zero = 0, badw = 0;
+    attr_ref wf = {-1, NULL, OFTString}, cf = {-1, NULL, OFTString};
     const OGRwkbGeometryType lt = wkbFlatten(OGR_L_GetGeomType(h));
     if (lt == wkbPoint || lt == wkbMultiPoint || lt == wkbPolygon ||
         lt == wkbMultiPolygon || lt == wkbCurvePolygon || lt == wkbMultiSurface)
@@ -516,18 +734,11 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
                  OGR_L_GetName(h), OGRGeometryTypeToName(lt));
         return FALSE;
     }
-    if (p->width_field)
-    {
-        wfield = OGR_FD_GetFieldIndex(OGR_L_GetLayerDefn(h), p->width_field);
-        if (wfield < 0)
-        {
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "WATERMESH: RIVERS layer '%s' has no field '%s' "
-                     "(WIDTH_FIELD).",
-                     OGR_L_GetName(h), p->width_field);
-            return FALSE;
-        }
-    }
+    if ((p->width_field &&
+         !attr_resolve(h, p->width_field, "WIDTH_FIELD", &wf)) ||
+        (p->class_field &&
+         !attr_resolve(h, p->class_field, "WIDTH_BY_CLASS", &cf)))
+        return FALSE;
     if (!to_working(h, dst, &fc.ct))
         return FALSE;
     OGR_L_ResetReading(h);
@@ -541,29 +752,10 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
             OGR_F_Destroy(f);
             continue;
         }
-        double w = p->width;
-        if (wfield >= 0)
-        {
-            double v;
-            const OGRFieldType ft = OGR_Fld_GetType(
-                OGR_FD_GetFieldDefn(OGR_L_GetLayerDefn(h), wfield));
-            int good = FALSE;
-            if (OGR_F_IsFieldSetAndNotNull(f, wfield))
-            {
-                if (ft == OFTReal || ft == OFTInteger || ft == OFTInteger64)
-                {
-                    v = OGR_F_GetFieldAsDouble(f, wfield);
-                    good = isfinite(v) && v > 0 && v <= WM_MAX_WIDTH;
-                }
-                else
-                    good = parse_width(OGR_F_GetFieldAsString(f, wfield), &v) &&
-                           v <= WM_MAX_WIDTH;
-            }
-            if (good)
-                w = v;
-            else
-                badw++;
-        }
+        int source;
+        const double w = river_width(f, p, &wf, &cf, &source);
+        wsrc[source]++;
+        badw += wf.field >= 0 && source != 0;
         OGRGeometryH g = linear(g0);
         const OGRwkbGeometryType t = wkbFlatten(OGR_G_GetGeometryType(g));
         int nparts = 1;
@@ -630,9 +822,11 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
         CPLError(CE_Warning, CPLE_AppDefined,
                  "WATERMESH: RIVERS layer '%s': %lu feature(s) with a NULL, "
                  "empty, unparsable, non-positive or absurd (> 100 km) '%s' "
-                 "use WIDTH=%g.",
+                 "use %s.",
                  OGR_L_GetName(h), (unsigned long)badw, p->width_field,
-                 p->width);
+                 p->nclasses ? "WIDTH_BY_CLASS (or WIDTH where no class "
+                               "matches)"
+                             : CPLSPrintf("WIDTH=%g", p->width));
     return ok;
 }
 
@@ -771,7 +965,7 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
         goto fail;
     s->unit = s->params.pixel / WM_Q;
     if (hRivers && !read_rivers(&b, hRivers, &s->params, s->unit, s->hSRS,
-                                &s->core.river_vertices))
+                                &s->core.river_vertices, s->width_source))
         goto fail;
     if (hLakes &&
         !read_lakes(&b, hLakes, s->unit, s->hSRS, &s->core.lake_vertices))

@@ -15,12 +15,27 @@
 #include <stdlib.h>
 #include <string.h>
 
-const char *const WM_OPTION_NAMES[] = {
-    "RIVERS",      "RIVERS_LAYER",     "RIVERS_WHERE",  "LAKES",
-    "LAKES_LAYER", "LAKES_WHERE",      "WIDTH",         "WIDTH_FIELD",
-    "PIXEL_SIZE",  "BLOCK_SIZE",       "SIMPLIFY",      "METHOD",
-    "HEURISTIC",   "MERGE_DISTANCE",   "DEVICE",        "NUM_THREADS",
-    "TARGET_SRS",  "MIN_FEATURE_AREA", "MESH_GEOMETRY", NULL};
+const char *const WM_OPTION_NAMES[] = {"RIVERS",
+                                       "RIVERS_LAYER",
+                                       "RIVERS_WHERE",
+                                       "LAKES",
+                                       "LAKES_LAYER",
+                                       "LAKES_WHERE",
+                                       "WIDTH",
+                                       "WIDTH_FIELD",
+                                       "WIDTH_BY_CLASS",
+                                       "PIXEL_SIZE",
+                                       "BLOCK_SIZE",
+                                       "SIMPLIFY",
+                                       "METHOD",
+                                       "HEURISTIC",
+                                       "MERGE_DISTANCE",
+                                       "DEVICE",
+                                       "NUM_THREADS",
+                                       "TARGET_SRS",
+                                       "MIN_FEATURE_AREA",
+                                       "MESH_GEOMETRY",
+                                       NULL};
 
 /* Parses a strictly numeric option value; CPLError on failure. */
 static int number(CSLConstList opts, const char *name, double def, double *out)
@@ -46,6 +61,50 @@ static int number(CSLConstList opts, const char *name, double def, double *out)
 }
 
 static int params_parse(CSLConstList opts, WMParams *p);
+
+/* WIDTH_BY_CLASS=<field>:<class>=<width>,<class>=<width>,...[,*=<width>]:
+ * the field (a field, or "field:hstore key") is what precedes the last ':'
+ * before the first '='. */
+static int parse_classes(const char *spec, WMParams *p)
+{
+    const char *eq = strchr(spec, '=');
+    const char *colon = NULL;
+    for (const char *c = spec; eq && c < eq; c++)
+        if (*c == ':')
+            colon = c;
+    int ok = colon && colon > spec;
+    if (ok)
+    {
+        p->class_field = CPLStrdup(spec);
+        p->class_field[colon - spec] = '\0';
+        char **items = CSLTokenizeString2(colon + 1, ",", 0);
+        for (int i = 0; ok && items[i]; i++)
+        {
+            char *e = strchr(items[i], '=');
+            char *end = NULL;
+            const double w = e ? CPLStrtod(e + 1, &end) : 0;
+            ok = e && e > items[i] && end != e + 1 && *end == '\0' && w > 0 &&
+                 w <= WM_MAX_WIDTH;
+            if (!ok)
+                break;
+            *e = '\0';
+            p->class_names = CSLAddString(p->class_names, items[i]);
+            p->class_widths = CPLRealloc(
+                p->class_widths, (size_t)(p->nclasses + 1) * sizeof(double));
+            p->class_widths[p->nclasses++] = w;
+        }
+        ok = ok && p->nclasses > 0;
+        CSLDestroy(items);
+    }
+    if (!ok)
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: WIDTH_BY_CLASS=%s: expected "
+                 "<field>:<class>=<width>,<class>=<width>,... (widths in "
+                 "metres, > 0 and <= 100000; * for any other class), e.g. "
+                 "waterway:river=10,stream=2,*=3.",
+                 spec);
+    return ok;
+}
 
 int WMParamsParse(CSLConstList opts, WMParams *p)
 {
@@ -209,6 +268,9 @@ static int params_parse(CSLConstList opts, WMParams *p)
     const char *wf = CSLFetchNameValue(opts, "WIDTH_FIELD");
     if (wf && *wf)
         p->width_field = CPLStrdup(wf);
+    const char *wc = CSLFetchNameValue(opts, "WIDTH_BY_CLASS");
+    if (wc && *wc && !parse_classes(wc, p))
+        return FALSE;
     const char *ts = CSLFetchNameValue(opts, "TARGET_SRS");
     if (ts && *ts)
         p->target_srs = CPLStrdup(ts);
@@ -240,7 +302,13 @@ void WMParamsFree(WMParams *p)
 {
     CPLFree(p->width_field);
     CPLFree(p->target_srs);
-    p->width_field = p->target_srs = NULL;
+    CPLFree(p->class_field);
+    CSLDestroy(p->class_names);
+    CPLFree(p->class_widths);
+    p->width_field = p->target_srs = p->class_field = NULL;
+    p->class_names = NULL;
+    p->class_widths = NULL;
+    p->nclasses = 0;
 }
 
 /* NULL when attribute filter `where` applies to layer h, else the

@@ -39,8 +39,13 @@ typedef enum
 /** Parsed, validated parameters. */
 typedef struct
 {
-    double width;            /* default river width, m */
-    char *width_field;       /* or NULL */
+    double width;         /* default river width, m */
+    char *width_field;    /* or NULL: a field, or "field:hstore key" */
+    char *class_field;    /* WIDTH_BY_CLASS's field (as width_field), or
+                             NULL */
+    char **class_names;   /* its classes ("*": any other) ... */
+    double *class_widths; /* ... and their widths, m */
+    int nclasses;
     double pixel;            /* PIXEL_SIZE, m */
     double block;            /* BLOCK_SIZE, m */
     int32_t n;               /* block / pixel */
@@ -90,6 +95,8 @@ typedef struct
     OGRSpatialReferenceH hSRS;
     WMParams params;
     struct WMDevice *device; /* where the field is computed (owned) */
+    size_t width_source[3];  /* river features whose width came from
+                                WIDTH_FIELD, WIDTH_BY_CLASS, WIDTH */
 } WMScene;
 
 /** A scene's field device (wm_device.c): the C path, or OpenCL with the

@@ -473,6 +473,12 @@ void WMPrintStats(const WMScene *s, const WMRunStats *st)
     printf("polygons %lu, output vertices %lu, triangles %lu\n",
            (unsigned long)st->polygons, (unsigned long)st->vertices,
            (unsigned long)st->triangles);
+    const size_t *ws = s->width_source;
+    if (ws[0] + ws[1] + ws[2])
+        printf("river widths: %lu from WIDTH_FIELD, %lu from WIDTH_BY_CLASS, "
+               "%lu WIDTH\n",
+               (unsigned long)ws[0], (unsigned long)ws[1],
+               (unsigned long)ws[2]);
     printf("V = %.3f (output vertices / (2 * %lu river + %lu lake "
            "vertices))\n",
            denom > 0 ? (double)st->vertices / denom : 0.0,
