@@ -147,6 +147,57 @@ def test_memory_layer_selection(qgis_env, tmp_path):
     assert features(water) == features(out, 'water')
 
 
+PYQGIS_CANCEL = r'''
+import os, sys, time
+from qgis.core import (QgsApplication, QgsProcessingContext, QgsProcessingException,
+                       QgsProcessingFeedback)
+app = QgsApplication([], False)
+app.initQgis()
+sys.path.insert(0, '/usr/share/qgis/python/plugins')
+sys.path.insert(0, sys.argv[1])
+from processing.core.Processing import Processing
+Processing.initialize()
+from watermesh.provider import WatermeshProvider
+provider = WatermeshProvider()
+QgsApplication.processingRegistry().addProvider(provider)
+alg = QgsApplication.processingRegistry().createAlgorithmById('watermesh:watermesh')
+
+class Feedback(QgsProcessingFeedback):
+    """Cancels at the first progress the command reports."""
+    def __init__(self):
+        super().__init__()
+        self.progressChanged.connect(lambda p: p > 0 and self.cancel())
+
+params = {'RIVERS': sys.argv[2] + '|layername=rivers', 'LAKES': sys.argv[2] + '|layername=lakes',
+          'PIXEL_SIZE': 0.25, 'NUM_THREADS': 1, 'WATER': sys.argv[3], 'MESH': sys.argv[4]}
+t0 = time.time()
+try:
+    alg.run(params, QgsProcessingContext(), Feedback(), {}, False)
+    print('NOT CANCELLED')
+except QgsProcessingException as e:
+    print('EXCEPTION', e)
+res, ok = alg.run(params, QgsProcessingContext(), Feedback())
+print('OK', ok, 'SECONDS %.2f' % (time.time() - t0))
+sys.stdout.flush()
+os._exit(0)
+'''
+
+
+def test_cancel_stops_the_command(qgis_env, tmp_path):
+    """Cancelling through the feedback stops gdal_watermesh at once (a run
+    of several seconds ends within one) and writes no output."""
+    script = tmp_path / 'cancel.py'
+    script.write_text(PYQGIS_CANCEL)
+    water, mesh = str(tmp_path / 'water.gpkg'), str(tmp_path / 'mesh.gpkg')
+    p = subprocess.run([sys.executable, str(script), os.path.join(REPO, 'qgis'), ANDORRA,
+                        water, mesh], env=qgis_env, stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
+    out = p.stdout
+    assert p.returncode == 0 and 'OK False' in out, out[-2000:] + p.stderr[-2000:]
+    assert float(out.split('SECONDS ')[1].split()[0]) < 2.0, out
+    assert not os.path.exists(water) and not os.path.exists(mesh)
+
+
 def test_defaults_are_the_drivers():
     """The algorithm's defaults and choices are the driver's (its XML)."""
     sys.path.insert(0, os.path.join(REPO, 'qgis'))
