@@ -5,6 +5,9 @@ over the input rivers; the picture of README's QGIS section.
 
     /usr/bin/python3 tools/render_qgis.py water.gpkg mesh.gpkg rivers.gpkg out.png \
         [xmin ymin xmax ymax]
+
+Each layer argument is a file or a QGIS source ("out.gpkg|layername=mesh");
+the rivers default to the layer named rivers.
 """
 
 import os
@@ -26,7 +29,8 @@ def main(argv):
     app.initQgis()
     water = QgsVectorLayer(argv[1], 'water', 'ogr')
     mesh = QgsVectorLayer(argv[2], 'mesh', 'ogr')
-    rivers = QgsVectorLayer(argv[3] + '|layername=rivers', 'rivers', 'ogr')
+    rivers = QgsVectorLayer(argv[3] if '|' in argv[3] else argv[3] + '|layername=rivers',
+                            'rivers', 'ogr')
     for lyr in (water, mesh, rivers):
         if not lyr.isValid():
             sys.exit('cannot open %s' % lyr.source())
