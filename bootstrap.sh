@@ -43,6 +43,13 @@ if [ ! -f "$T/test_ogrsf.cpp" ]; then
     '*/apps/test_ogrsf.cpp' '*/apps/commonutils.cpp' '*/apps/commonutils.h'
   rm -rf "$src"
 fi
+# the Khronos glTF validator (npm) for the tests of -of GLB, into tools/node
+if [ ! -d tools/node/node_modules/gltf-validator ]; then
+  if ! command -v npm >/dev/null; then
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends nodejs npm
+  fi
+  npm install --silent --no-audit --no-fund --prefix tools/node gltf-validator@2.0.0-dev.3.10
+fi
 [ -x configure ] || autoreconf -fi
 [ -f Makefile ] || ./configure ${CONFIGURE_FLAGS:-}
 make -j"$(nproc)"

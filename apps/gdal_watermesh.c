@@ -49,7 +49,10 @@ static void usage(int code)
         "\n"
         "Writes layers 'water' (dissolved polygons per block) and 'mesh'\n"
         "(constrained Delaunay triangles per polygon) to <dst_datasource>\n"
-        "(default format GPKG, or guessed from the extension).\n");
+        "(default format GPKG, or guessed from the extension). With -of GLB,\n"
+        "<dst_datasource> is a folder of binary glTF 2.0 files, one per "
+        "block,\n"
+        "and index.json.\n");
     exit(code);
 }
 
@@ -293,6 +296,21 @@ static int put_in_place(const char *newdir, const char *olddir,
     return ok;
 }
 
+/* Writes the scene as binary glTF files into the new folder `path`;
+ * FALSE after a CPLError. */
+static int write_glb(const WMScene *scene, const char *path, int show_progress)
+{
+    if (VSIMkdir(path, 0755) != 0)
+    {
+        CPLError(CE_Failure, CPLE_FileIO, "gdal_watermesh: cannot create %s.",
+                 path);
+        return FALSE;
+    }
+    return WMSceneWriteGLB(scene, path, progress,
+                           show_progress ? (void *)1 : NULL) == CE_None &&
+           !g_interrupted;
+}
+
 /* Writes the scene: both layers into a new dataset at `path`, or, when
  * mesh_path is set, the water layer to `path` and the mesh layer to
  * mesh_path; FALSE after a CPLError. */
@@ -462,8 +480,12 @@ int main(int argc, char **argv)
     if (stats)
         all = CSLSetNameValue(all, "STATS", "YES");
 
-    GDALDriverH drv = format ? GDALGetDriverByName(format) : guess_driver(dst);
-    if (!drv)
+    /* -of GLB: a folder of binary glTF files, one per block */
+    const int glb = format && EQUAL(format, "GLB");
+    GDALDriverH drv = glb      ? NULL
+                      : format ? GDALGetDriverByName(format)
+                               : guess_driver(dst);
+    if (!drv && !glb)
     {
         CPLError(CE_Failure, CPLE_AppDefined,
                  "gdal_watermesh: no vector driver %s%s.",
@@ -472,7 +494,7 @@ int main(int argc, char **argv)
     }
     /* what the run writes: dst, or two files by the single-layer rule;
      * any of them existing is refused before any work */
-    if (single_layer_file(drv, dst))
+    if (!glb && single_layer_file(drv, dst))
     {
         water_dst = layer_file(drv, dst, "water");
         mesh_dst = layer_file(drv, dst, "mesh");
@@ -529,8 +551,9 @@ int main(int argc, char **argv)
                                     newdir, CPLGetFilename(mesh_dst), NULL))
                               : NULL;
         ok = VSIMkdir(newdir, 0755) == 0 &&
-             write_output(scene, drv, tmpw, tmpm, lco, dsco,
-                          show_progress && !quiet) &&
+             (glb ? write_glb(scene, tmpw, show_progress && !quiet)
+                  : write_output(scene, drv, tmpw, tmpm, lco, dsco,
+                                 show_progress && !quiet)) &&
              put_in_place(newdir, olddir, dstdir, targets, overwrite);
         CPLFree(tmpw);
         CPLFree(tmpm);

@@ -217,10 +217,21 @@ OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
 /** Polygon area in m^2 (exact lattice area, then scaled). */
 double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p);
 
-/** Runs every block of a built scene (those touching SPAT, if set) and
- *  writes the features to hWater / hMesh (either may be NULL); prints the
- *  stage table when STATS was set. WMGenerate is WMSceneBuild + this. */
+/** Runs every block of a built scene (those touching SPAT, if set),
+ *  handing each result to sink in block order; prints the stage table
+ *  when STATS was set. */
+CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
+                  GDALProgressFunc pfn, void *pArg);
+
+/** WMSceneRun writing the features to hWater / hMesh (either may be
+ *  NULL). WMGenerate is WMSceneBuild + this. */
 CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
+                       GDALProgressFunc pfn, void *pArg);
+
+/** WMSceneRun writing one binary glTF 2.0 file per block with triangles
+ *  into folder (which must exist), block_<bx>_<by>.glb, and index.json
+ *  listing them (wm_gltf.c). */
+CPLErr WMSceneWriteGLB(const WMScene *s, const char *folder,
                        GDALProgressFunc pfn, void *pArg);
 
 /** Prints the per-stage table and the vertex ratio to stdout. */

@@ -545,8 +545,8 @@ static void add_stats(WMRunStats *to, const WMRunStats *st)
     to->pairs += st->pairs;
 }
 
-CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
-                       GDALProgressFunc pfn, void *pArg)
+CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
+                  GDALProgressFunc pfn, void *pArg)
 {
     const double *spat = s->params.have_spat ? s->params.spat : NULL;
     uint64_t total = 0, done = 0;
@@ -558,7 +558,6 @@ CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
         CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
         return CE_Failure;
     }
-    gen_sink g = {s, hWater, hMesh};
     WMRunStats all;
     memset(&all, 0, sizeof all);
     WMBlockWalk w;
@@ -578,7 +577,7 @@ CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
                             (double)(done + n) / (double)total, pfn, pArg)
                       : NULL;
             WMRunStats st;
-            err = WMRunBlocks(s, batch, n, write_block, &g,
+            err = WMRunBlocks(s, batch, n, sink, user,
                               scaled ? GDALScaledProgress : pfn,
                               scaled ? scaled : pArg, &st);
             GDALDestroyScaledProgress(scaled);
@@ -596,6 +595,13 @@ CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
     if (err == CE_None && s->params.stats)
         WMPrintStats(s, &all);
     return err;
+}
+
+CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
+                       GDALProgressFunc pfn, void *pArg)
+{
+    gen_sink g = {s, hWater, hMesh};
+    return WMSceneRun(s, write_block, &g, pfn, pArg);
 }
 
 CPLErr WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes, OGRLayerH hWater,
