@@ -45,6 +45,7 @@ static void usage(int code)
         "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco "
         "<NAME>=<VALUE>]...\n"
         "       [-overwrite] [-progress|-q] [-stats]\n"
+        "       [-shard <i>/<N>] [-shard-env <var>] [-resume] [-list-blocks]\n"
         "       [<scene.watermesh>] <dst_datasource>\n"
         "\n"
         "Writes layers 'water' (dissolved polygons per block) and 'mesh'\n"
@@ -296,6 +297,75 @@ static int put_in_place(const char *newdir, const char *olddir,
     return ok;
 }
 
+/* SHARD=i/N from -shard i/N, or from -shard N (or i/N) and -shard-env
+ * VAR, whose value is i (a job array's task id); FALSE after a message. */
+static int add_shard(char ***opts, const char *shard, const char *env)
+{
+    const char *slash = shard ? strchr(shard, '/') : NULL;
+    const char *n = slash ? slash + 1 : shard;
+    char *end = NULL;
+    if (!n || strtol(n, &end, 10) < 1 || *end || (!env && !slash))
+    {
+        fprintf(stderr, "ERROR: -shard needs i/N (or N with -shard-env).\n");
+        return FALSE;
+    }
+    const char *i = env ? getenv(env) : NULL;
+    if (env && (!i || !*i || strtol(i, &end, 10) < 0 || *end))
+    {
+        fprintf(stderr,
+                "ERROR: -shard-env %s: the variable holds no shard index "
+                "(%s).\n",
+                env, i ? i : "unset");
+        return FALSE;
+    }
+    char *spec = env ? CPLStrdup(CPLSPrintf("%s/%s", i, n)) : CPLStrdup(shard);
+    *opts = CSLSetNameValue(*opts, "SHARD", spec);
+    CPLFree(spec);
+    return TRUE;
+}
+
+/* -list-blocks: the blocks a run would compute (of SHARD, SPAT), "bx by"
+ * a line, in run order; FALSE after a CPLError. */
+static int list_blocks(char **all)
+{
+    WMSources src;
+    if (!WMSourcesOpen(all, &src))
+        return FALSE;
+    WMScene *s = WMSceneBuild(src.hRivers, src.hLakes, all);
+    WMSourcesClose(&src);
+    if (!s)
+        return FALSE;
+    const double *spat = s->params.have_spat ? s->params.spat : NULL;
+    uint64_t total = 0, first = 0, last = 0, k = 0;
+    int ok = WMBlockCount(s, spat, &total);
+    WMShardRange(s, total, &first, &last);
+    WMBlockWalk w;
+    WMBlockWalkBegin(&w, s, spat);
+    int64_t b[2];
+    size_t n = 0;
+    while (ok && (ok = WMBlockWalkNext(&w, b, 1, &n)) && n == 1 && k < last)
+        if (k++ >= first)
+            printf("%lld %lld\n", (long long)b[0], (long long)b[1]);
+    WMBlockWalkEnd(&w);
+    WMSceneFree(s);
+    return ok;
+}
+
+/* -resume: TRUE (with a note) when every target exists: a job that
+ * finished, since outputs are only ever put in place complete. */
+static int done_before(const char *const targets[2])
+{
+    for (int t = 0; t < 2 && targets[t]; t++)
+    {
+        VSIStatBufL sb;
+        if (VSIStatL(targets[t], &sb) != 0)
+            return FALSE;
+    }
+    fprintf(stderr, "gdal_watermesh: %s exists; skipped (-resume).\n",
+            targets[0]);
+    return TRUE;
+}
+
 /* Writes the scene as binary glTF files into the new folder `path`;
  * FALSE after a CPLError. */
 static int write_glb(const WMScene *scene, const char *path, int show_progress)
@@ -390,6 +460,8 @@ int main(int argc, char **argv)
     const char *format = NULL, *descriptor = NULL, *dst = NULL;
     char *water_dst = NULL, *mesh_dst = NULL; /* what the run writes */
     int overwrite = FALSE, show_progress = FALSE, quiet = FALSE, stats = FALSE;
+    int list = FALSE, resume = FALSE;
+    const char *shard = NULL, *shard_env = NULL;
     int rc = 1;
 
     for (int i = 1; i < argc; i++)
@@ -412,6 +484,14 @@ int main(int argc, char **argv)
             quiet = TRUE;
         else if (EQUAL(a, "-stats"))
             stats = TRUE;
+        else if (EQUAL(a, "-list-blocks"))
+            list = TRUE;
+        else if (EQUAL(a, "-resume"))
+            resume = TRUE;
+        else if (EQUAL(a, "-shard") && more)
+            shard = argv[++i];
+        else if (EQUAL(a, "-shard-env") && more)
+            shard_env = argv[++i];
         else if (EQUAL(a, "-spat"))
         {
             if (i + 4 >= argc)
@@ -457,7 +537,12 @@ int main(int argc, char **argv)
             usage(1);
         }
     }
-    if (!dst)
+    if (list && dst && !descriptor)
+    {
+        descriptor = dst; /* -list-blocks writes nothing */
+        dst = NULL;
+    }
+    if (!dst && !list)
     {
         fprintf(stderr, "ERROR: no destination datasource given.\n");
         usage(1);
@@ -479,6 +564,13 @@ int main(int argc, char **argv)
     }
     if (stats)
         all = CSLSetNameValue(all, "STATS", "YES");
+    if ((shard || shard_env) && !add_shard(&all, shard, shard_env))
+        goto end;
+    if (list)
+    {
+        rc = list_blocks(all) ? 0 : 1;
+        goto end;
+    }
 
     /* -of GLB: a folder of binary glTF files, one per block */
     const int glb = format && EQUAL(format, "GLB");
@@ -502,6 +594,11 @@ int main(int argc, char **argv)
     else
         water_dst = CPLStrdup(dst);
     const char *const targets[2] = {water_dst, mesh_dst};
+    if (resume && done_before(targets))
+    {
+        rc = 0;
+        goto end;
+    }
     for (int t = 0; t < 2 && targets[t]; t++)
     {
         VSIStatBufL sb;

@@ -12,6 +12,7 @@
 #include <cpl_vsi.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -293,6 +294,22 @@ static int params_parse(CSLConstList opts, WMParams *p)
             return FALSE;
         }
         p->have_spat = TRUE;
+    }
+    const char *shard = CSLFetchNameValue(opts, "SHARD");
+    if (shard)
+    {
+        long long i = -1, n = 0;
+        char tail = 0;
+        if (sscanf(shard, "%lld/%lld%c", &i, &n, &tail) != 2 || n < 1 ||
+            i < 0 || i >= n)
+        {
+            CPLError(CE_Failure, CPLE_IllegalArg,
+                     "WATERMESH: SHARD=%s: expected i/N with 0 <= i < N.",
+                     shard);
+            return FALSE;
+        }
+        p->shard = i;
+        p->nshards = n;
     }
     p->stats = CPLTestBool(CSLFetchNameValueDef(opts, "STATS", "NO"));
     return TRUE;

@@ -59,7 +59,9 @@ typedef struct
     int num_threads;
     char *target_srs; /* or NULL */
     int have_spat;
-    double spat[4]; /* xmin, ymin, xmax, ymax in the working CRS */
+    double spat[4];         /* xmin, ymin, xmax, ymax in the working CRS */
+    int64_t shard, nshards; /* SHARD=i/N: the i-th of N contiguous runs of
+                               the blocks (nshards 0: all) */
     int stats;
 } WMParams;
 
@@ -217,7 +219,13 @@ OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
 /** Polygon area in m^2 (exact lattice area, then scaled). */
 double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p);
 
-/** Runs every block of a built scene (those touching SPAT, if set),
+/** Blocks [*first, *last) of the scene's walk of `total` blocks are
+ *  SHARD's (all when no SHARD is set). */
+void WMShardRange(const WMScene *s, uint64_t total, uint64_t *first,
+                  uint64_t *last);
+
+/** Runs every block of a built scene (those touching SPAT, if set, and of
+ *  SHARD's range),
  *  handing each result to sink in block order; prints the stage table
  *  when STATS was set. */
 CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,

@@ -545,13 +545,41 @@ static void add_stats(WMRunStats *to, const WMRunStats *st)
     to->pairs += st->pairs;
 }
 
+void WMShardRange(const WMScene *s, uint64_t total, uint64_t *first,
+                  uint64_t *last)
+{
+    const uint64_t i = (uint64_t)s->params.shard,
+                   n = s->params.nshards > 0 ? (uint64_t)s->params.nshards : 1;
+    /* i * total / n without overflow for any block count */
+    *first = i * (total / n) + i * (total % n) / n;
+    *last = (i + 1) * (total / n) + (i + 1) * (total % n) / n;
+}
+
+/* Keeps the blocks of batch (n pairs) whose place in the walk, counting
+ * from *seen, falls in [first, last); advances *seen. */
+static void shard_batch(int64_t *batch, size_t *n, uint64_t *seen,
+                        uint64_t first, uint64_t last)
+{
+    size_t kept = 0;
+    for (size_t k = 0; k < *n; k++, (*seen)++)
+        if (*seen >= first && *seen < last)
+        {
+            batch[2 * kept] = batch[2 * k];
+            batch[2 * kept + 1] = batch[2 * k + 1];
+            kept++;
+        }
+    *n = kept;
+}
+
 CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
                   GDALProgressFunc pfn, void *pArg)
 {
     const double *spat = s->params.have_spat ? s->params.spat : NULL;
-    uint64_t total = 0, done = 0;
+    uint64_t total = 0, done = 0, first = 0, last = 0;
     if (!WMBlockCount(s, spat, &total))
         return CE_Failure;
+    WMShardRange(s, total, &first, &last);
+    uint64_t seen = 0; /* blocks of the walk so far, shard or not */
     int64_t *batch = VSIMalloc2(WM_RUN_BATCH, 2 * sizeof(int64_t));
     if (!batch)
     {
@@ -563,19 +591,25 @@ CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
     WMBlockWalk w;
     WMBlockWalkBegin(&w, s, spat);
     CPLErr err = CE_None;
-    size_t n = 0;
+    size_t n = 0, raw = 0;
     do
     {
-        if (!WMBlockWalkNext(&w, batch, WM_RUN_BATCH, &n))
+        if (!WMBlockWalkNext(&w, batch, WM_RUN_BATCH, &raw))
+        {
             err = CE_Failure;
-        else if (n > 0 || done == 0)
+            break;
+        }
+        n = raw;
+        shard_batch(batch, &n, &seen, first, last);
+        if (n > 0 || done == 0)
         {
             /* one run even for an empty scene */
             void *scaled =
-                total ? GDALCreateScaledProgress(
-                            (double)done / (double)total,
-                            (double)(done + n) / (double)total, pfn, pArg)
-                      : NULL;
+                last > first ? GDALCreateScaledProgress(
+                                   (double)done / (double)(last - first),
+                                   (double)(done + n) / (double)(last - first),
+                                   pfn, pArg)
+                             : NULL;
             WMRunStats st;
             err = WMRunBlocks(s, batch, n, sink, user,
                               scaled ? GDALScaledProgress : pfn,
@@ -584,7 +618,7 @@ CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
             add_stats(&all, &st);
             done += n;
         }
-    } while (err == CE_None && n == WM_RUN_BATCH);
+    } while (err == CE_None && raw == WM_RUN_BATCH && seen < last);
     WMBlockWalkEnd(&w);
     VSIFree(batch);
     if (err == CE_None && pfn && !pfn(1.0, "", pArg))

@@ -1,0 +1,130 @@
+"""Independent block jobs (docs/distributed.md): -list-blocks, -shard i/N
+(-shard-env), -resume, GNU Parallel with --joblog / --resume-failed, a job
+killed mid-run, and the merge recipe (ogr2ogr -append in shard order),
+whose result equals a single process's feature for feature."""
+
+import os
+import signal
+import subprocess
+import time
+
+import pytest
+from osgeo import gdal
+
+from conftest import CLI_PATH, DATA_DIR
+
+ANDORRA = os.path.join(DATA_DIR, 'osm_andorra_2023.gpkg')
+ARGS = ['-rivers', ANDORRA, '-rivers_layer', 'rivers', '-lakes', ANDORRA,
+        '-lakes_layer', 'lakes']
+
+
+def cli(*args, env=None):
+    return subprocess.run([CLI_PATH] + list(args), stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, universal_newlines=True, env=env,
+                          timeout=600)
+
+
+def blocks(*extra, env=None):
+    p = cli('-list-blocks', *(ARGS + list(extra)), env=env)
+    assert p.returncode == 0, p.stderr
+    return [tuple(int(v) for v in l.split()) for l in p.stdout.splitlines()]
+
+
+def features(path):
+    """Every feature of both layers: FID, fields, WKB, in order."""
+    ds = gdal.OpenEx(path, gdal.OF_VECTOR)
+    out = {}
+    for name in ('water', 'mesh'):
+        lyr = ds.GetLayerByName(name)
+        out[name] = [(f.GetFID(), [f.GetField(i) for i in range(f.GetFieldCount())],
+                      f.GetGeometryRef().ExportToWkb()) for f in lyr]
+    ds = None
+    return out
+
+
+def merge(shards, dst):
+    """The recipe of docs/distributed.md: ogr2ogr -append, in shard order."""
+    for s in shards:
+        p = subprocess.run(['ogr2ogr', '-append', dst, s], stderr=subprocess.PIPE,
+                           universal_newlines=True)
+        assert p.returncode == 0, p.stderr
+
+
+@pytest.fixture(scope='module')
+def single(tmp_path_factory):
+    out = str(tmp_path_factory.mktemp('single') / 'single.gpkg')
+    p = cli('-q', *(ARGS + [out]))
+    assert p.returncode == 0, p.stderr
+    return features(out)
+
+
+@pytest.mark.parametrize('n', [1, 3, 4, 64])
+def test_shards_partition_the_blocks(n):
+    every = blocks()
+    parts = [blocks('-shard', '%d/%d' % (i, n)) for i in range(n)]
+    assert sum(parts, []) == every and len(every) > 40
+    sizes = [len(p) for p in parts]
+    assert max(sizes) - min(sizes) <= 1
+
+
+def test_shard_env():
+    env = dict(os.environ, SLURM_ARRAY_TASK_ID='2')
+    assert blocks('-shard', '4', '-shard-env', 'SLURM_ARRAY_TASK_ID', env=env) == \
+        blocks('-shard', '2/4')
+    for bad, msg in ((['-shard', '4/4'], 'SHARD=4/4'), (['-shard', '4'], '-shard needs'),
+                     (['-shard', '4', '-shard-env', 'NO_SUCH_VAR_X'], 'NO_SUCH_VAR_X')):
+        p = cli('-list-blocks', *(ARGS + bad))
+        assert p.returncode != 0 and msg in p.stderr, (bad, p.stderr)
+
+
+def test_gnu_parallel_resume_failed_and_merge(tmp_path, single):
+    """Four shards on GNU Parallel, one failing the first time; parallel
+    --resume-failed reruns it alone; the merge equals a single run."""
+    out = tmp_path / 'shards'
+    out.mkdir()
+    (tmp_path / 'stop_1').write_text('')
+    job = ('test -e %s/stop_{} && exit 3; %s -q %s -shard {}/4 %s/shard_{}.gpkg'
+           % (tmp_path, CLI_PATH, ' '.join(ARGS), out))
+    log = str(tmp_path / 'jobs.log')
+    run = lambda *extra: subprocess.run(['parallel', '-j', '2', '--joblog', log] + list(extra)
+                                        + [job, ':::', '0', '1', '2', '3'],
+                                        stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                                        universal_newlines=True, timeout=600)
+    p = run()
+    assert p.returncode == 1, p.stderr  # one job failed
+    assert sorted(os.listdir(out)) == ['shard_0.gpkg', 'shard_2.gpkg', 'shard_3.gpkg']
+    mtimes = {f: os.stat(out / f).st_mtime_ns for f in os.listdir(out)}
+    os.unlink(tmp_path / 'stop_1')
+    p = run('--resume-failed')
+    assert p.returncode == 0, p.stderr
+    assert {f: os.stat(out / f).st_mtime_ns for f in mtimes} == mtimes
+    merged = str(tmp_path / 'merged.gpkg')
+    merge([str(out / ('shard_%d.gpkg' % i)) for i in range(4)], merged)
+    assert features(merged) == single
+
+
+def test_killed_job_leaves_nothing_and_resumes(tmp_path, single):
+    """A job killed mid-run leaves no output; -resume then skips the shards
+    already done and computes the rest; the merge equals a single run."""
+    out = tmp_path / 'shards'
+    out.mkdir()
+    dst = lambda i: str(out / ('shard_%d.gpkg' % i))
+    for i in (0, 2):
+        assert cli('-q', *(ARGS + ['-shard', '%d/3' % i, dst(i)])).returncode == 0
+    proc = subprocess.Popen([CLI_PATH, '-q', '-num_threads', '1', '-pixel_size', '0.25']
+                            + ARGS + ['-shard', '1/3', dst(1)],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    time.sleep(0.5)
+    assert proc.poll() is None, 'the job ended before it could be killed'
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=30) != 0
+    assert sorted(os.listdir(out)) == ['shard_0.gpkg', 'shard_2.gpkg']
+    before = os.stat(dst(0)).st_mtime_ns
+    for i in range(3):
+        p = cli('-q', '-resume', *(ARGS + ['-shard', '%d/3' % i, dst(i)]))
+        assert p.returncode == 0, p.stderr
+        assert ('skipped (-resume)' in p.stderr) == (i != 1), p.stderr
+    assert os.stat(dst(0)).st_mtime_ns == before
+    merged = str(tmp_path / 'merged.gpkg')
+    merge([dst(i) for i in range(3)], merged)
+    assert features(merged) == single
