@@ -7,7 +7,7 @@ cd "$(dirname "$0")"
 PKGS="build-essential autoconf automake libtool pkg-config clang-format libgdal-dev gdal-bin
 python3-gdal python3-pytest python3-shapely python3-numpy python3-matplotlib
 ocl-icd-opencl-dev opencl-headers pocl-opencl-icd clinfo clang libclang-rt-14-dev
-qgis python3-qgis parallel"
+qgis python3-qgis parallel munge slurm-wlm"
 missing=""
 for p in $PKGS; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "ok installed" || missing="$missing $p"
