@@ -183,14 +183,18 @@ static int set_aside(swap *w, const char *path)
     return ok;
 }
 
-/* With -overwrite, every file of the old dataset at `target` (a file, not a
- * folder) is set aside, so that none of its side files (a .qix, .cpg,
- * -wal) outlives it next to the new one. */
-static int set_aside_dataset(swap *w, const char *target)
+/* With -overwrite, every file of the old dataset at `target` is set
+ * aside, so that none of its side files (a .qix, .cpg, -wal) outlives it
+ * next to the new one. A folder target is merged into (a Shapefile
+ * folder), or set aside whole with whole_folder (-of GLB: no stale block
+ * file may stay beside the new index). */
+static int set_aside_dataset(swap *w, const char *target, int whole_folder)
 {
     VSIStatBufL sb;
-    if (VSIStatL(target, &sb) != 0 || VSI_ISDIR(sb.st_mode))
+    if (VSIStatL(target, &sb) != 0)
         return TRUE;
+    if (VSI_ISDIR(sb.st_mode))
+        return !whole_folder || set_aside(w, target);
     CPLPushErrorHandler(CPLQuietErrorHandler);
     GDALDatasetH ds = GDALOpenEx(target, GDAL_OF_VECTOR, NULL, NULL, NULL);
     CPLPopErrorHandler();
@@ -278,7 +282,7 @@ static void undo(swap *w)
  * targets' old files with -overwrite; all or nothing. */
 static int put_in_place(const char *newdir, const char *olddir,
                         const char *dstdir, const char *const targets[2],
-                        int overwrite)
+                        int overwrite, int whole_folder)
 {
     if (!move_into_place(NULL, newdir, dstdir, overwrite))
         return FALSE;
@@ -287,7 +291,7 @@ static int put_in_place(const char *newdir, const char *olddir,
         atoi(CPLGetConfigOption("GDAL_WATERMESH_TEST_RENAME_FAILURE", "0"));
     int ok = VSIMkdir(olddir, 0755) == 0;
     for (int t = 0; ok && overwrite && t < 2 && targets[t]; t++)
-        ok = set_aside_dataset(&w, targets[t]);
+        ok = set_aside_dataset(&w, targets[t], whole_folder);
     ok = ok && move_into_place(&w, newdir, dstdir, overwrite);
     if (!ok)
         undo(&w);
@@ -353,7 +357,7 @@ static int list_blocks(char **all)
 
 /* -resume: TRUE (with a note) when every target exists: a job that
  * finished, since outputs are only ever put in place complete. */
-static int done_before(const char *const targets[2])
+static int done_before(const char *const targets[2], int quiet)
 {
     for (int t = 0; t < 2 && targets[t]; t++)
     {
@@ -361,8 +365,9 @@ static int done_before(const char *const targets[2])
         if (VSIStatL(targets[t], &sb) != 0)
             return FALSE;
     }
-    fprintf(stderr, "gdal_watermesh: %s exists; skipped (-resume).\n",
-            targets[0]);
+    if (!quiet)
+        fprintf(stderr, "gdal_watermesh: %s exists; skipped (-resume).\n",
+                targets[0]);
     return TRUE;
 }
 
@@ -537,6 +542,11 @@ int main(int argc, char **argv)
             usage(1);
         }
     }
+    char *dst_own = dst ? CPLStrdup(dst) : NULL; /* without a trailing / */
+    for (size_t n = dst_own ? strlen(dst_own) : 0;
+         n > 1 && dst_own[n - 1] == '/';)
+        dst_own[--n] = '\0';
+    dst = dst_own;
     if (list && dst && !descriptor)
     {
         descriptor = dst; /* -list-blocks writes nothing */
@@ -594,7 +604,7 @@ int main(int argc, char **argv)
     else
         water_dst = CPLStrdup(dst);
     const char *const targets[2] = {water_dst, mesh_dst};
-    if (resume && done_before(targets))
+    if (resume && done_before(targets, quiet))
     {
         rc = 0;
         goto end;
@@ -651,7 +661,7 @@ int main(int argc, char **argv)
              (glb ? write_glb(scene, tmpw, show_progress && !quiet)
                   : write_output(scene, drv, tmpw, tmpm, lco, dsco,
                                  show_progress && !quiet)) &&
-             put_in_place(newdir, olddir, dstdir, targets, overwrite);
+             put_in_place(newdir, olddir, dstdir, targets, overwrite, glb);
         CPLFree(tmpw);
         CPLFree(tmpm);
         CPLFree(newdir);
@@ -665,6 +675,7 @@ int main(int argc, char **argv)
     if (!ok && g_interrupted)
         fprintf(stderr, "ERROR: interrupted; nothing written to %s.\n", dst);
 end:
+    CPLFree(dst_own);
     CPLFree(water_dst);
     CPLFree(mesh_dst);
     CSLDestroy(all);

@@ -111,6 +111,22 @@ def test_glb_valid_and_complete(wm, simple_options, simple_args, tmp_dir, scene)
         assert all(0 <= p[0] <= block and p[1] == 0 and -block <= p[2] <= 0 for p in pos)
 
 
+def test_glb_overwrite_replaces_the_folder(wm, simple_args, tmp_dir):
+    """-overwrite replaces the whole folder: a second run on fewer blocks
+    leaves no file of the first beside its index; a trailing / works."""
+    out = os.path.join(tmp_dir, 'glb_again')
+    first = glb_run(wm, simple_args, out + '/')
+    b = first['blocks'][0]
+    x0, y0 = b['origin']
+    p = wm.cli(simple_args + ['-q', '-overwrite', '-spat', str(x0 + 1), str(y0 + 1),
+                              str(x0 + 2), str(y0 + 2), '-of', 'GLB', out])
+    assert p.returncode == 0, p.stderr
+    with open(os.path.join(out, 'index.json')) as f:
+        second = json.load(f)
+    assert len(second['blocks']) < len(first['blocks'])
+    assert sorted(os.listdir(out)) == sorted([x['file'] for x in second['blocks']] + ['index.json'])
+
+
 def test_glb_refuses_existing_folder(wm, simple_args, tmp_dir):
     out = os.path.join(tmp_dir, 'glb_exists')
     os.mkdir(out)
@@ -121,4 +137,4 @@ def test_glb_refuses_existing_folder(wm, simple_args, tmp_dir):
     assert os.listdir(out) == ['keep.txt']
     p = wm.cli(simple_args + ['-q', '-overwrite', '-of', 'GLB', out])
     assert p.returncode == 0, p.stderr
-    assert 'index.json' in os.listdir(out) and 'keep.txt' in os.listdir(out)
+    assert 'index.json' in os.listdir(out) and 'keep.txt' not in os.listdir(out)

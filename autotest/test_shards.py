@@ -121,7 +121,7 @@ def test_killed_job_leaves_nothing_and_resumes(tmp_path, single):
     assert sorted(os.listdir(out)) == ['shard_0.gpkg', 'shard_2.gpkg']
     before = os.stat(dst(0)).st_mtime_ns
     for i in range(3):
-        p = cli('-q', '-resume', *(ARGS + ['-shard', '%d/3' % i, dst(i)]))
+        p = cli('-resume', *(ARGS + ['-shard', '%d/3' % i, dst(i)]))
         assert p.returncode == 0, p.stderr
         assert ('skipped (-resume)' in p.stderr) == (i != 1), p.stderr
     assert os.stat(dst(0)).st_mtime_ns == before

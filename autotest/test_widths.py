@@ -26,6 +26,10 @@ CASES = [
     (None, 'stream', 2.0),       # no width: the stream class, 2
     (None, 'ditch', 3.0),        # a class not in the table: *, 3
     ('0', 'canal', 8.0),         # not positive: the canal class, 8
+    ('10-20 ft', 'river', 15 * 0.3048),   # a range's unit serves both ends
+    ('3;4 ft', 'river', 4 * 0.3048),      # a list's last unit serves all
+    ('2 m;3', 'river', 3.0),
+    ('-5', 'canal', 8.0),        # negative: the canal class
 ]
 CLASSES = 'waterway:river=10,canal=8,stream=2,*=3'
 
@@ -71,7 +75,7 @@ def test_osm_width_forms_and_classes(wm, osm_like, field):
     for (text, cls, want), w in zip(CASES, got):
         assert abs(w - want) <= 0.1, (text, cls, want, w)
     warn = [m for m in res.cap.warnings if 'WIDTH_BY_CLASS' in m]
-    assert len(warn) == 1 and '4 feature(s)' in warn[0], res.cap.text
+    assert len(warn) == 1 and '5 feature(s)' in warn[0], res.cap.text
 
 
 def test_classes_from_an_hstore_key(wm, osm_like, tmp_path):
@@ -90,7 +94,22 @@ def test_stats_count_width_sources(wm, osm_like, tmp_dir):
     assert p.returncode == 0, p.stderr
     m = re.search(r'^river widths: (\d+) from WIDTH_FIELD, (\d+) from WIDTH_BY_CLASS, '
                   r'(\d+) WIDTH$', p.stdout, re.M)
-    assert m and [int(x) for x in m.groups()] == [8, 4, 0], p.stdout
+    assert m and [int(x) for x in m.groups()] == [11, 5, 0], p.stdout
+
+
+def test_class_names_trimmed(wm, osm_like):
+    res = wm.run({'RIVERS': osm_like, 'WIDTH_BY_CLASS': 'waterway: canal = 8 , river=6', 'WIDTH': '4'})
+    want = [8.0 if cls == 'canal' else 6.0 if cls == 'river' else 4.0 for _, cls, _ in CASES]
+    assert all(abs(w - v) <= 0.1 for w, v in zip(widths(res), want)), widths(res)
+
+
+def test_hstore_key_of_a_numeric_field_refused(wm, tmp_path):
+    path = str(tmp_path / 'num.gpkg')
+    scenes.write_layer(path, 'rivers', ogr.wkbLineString, scenes.SCENE_EPSG,
+                       [{'geom': 'LINESTRING (400000 4700000, 400100 4700000)', 'w': 3.0}],
+                       fields=[('w', 'Real')])
+    ds, cap = wm.open({'RIVERS': path, 'WIDTH_FIELD': 'w:width'})
+    assert ds is None and 'text (hstore) field' in cap.text, cap.text
 
 
 @pytest.mark.parametrize('spec', ['river=10', 'waterway:', 'waterway:river', 'waterway:river=0',

@@ -538,9 +538,11 @@ static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
     }
     const double px = p.x - (double)c * WM_Q, py = p.y - (double)r * WM_Q;
     const double lim = (double)WM_Q / 4;
+    /* a saddle's pairings join neighbouring sides, never opposite ones */
     for (int i = 0; i < n; i++)
         for (int j = i + 1; j < n; j++)
-            if (seg_dist2(px, py, x[i], y[i], x[j], y[j]) <= lim * lim)
+            if (!(n == 4 && j == i + 2) &&
+                seg_dist2(px, py, x[i], y[i], x[j], y[j]) <= lim * lim)
                 return 0;
     return 1;
 }

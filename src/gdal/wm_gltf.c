@@ -21,6 +21,7 @@
 #include <cpl_vsi.h>
 
 #include <float.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -119,12 +120,29 @@ static unsigned char *bin_chunk(const WMScene *s, const wm_block_result *r,
     return bin;
 }
 
+/* printf into a new string of any length; CPLFree it. */
+static char *format(const char *fmt, ...) CPL_PRINT_FUNC_FORMAT(1, 2);
+static char *format(const char *fmt, ...)
+{
+    va_list ap;
+    char *out = NULL;
+    va_start(ap, fmt);
+    const int n = CPLVASPrintf(&out, fmt, ap);
+    va_end(ap);
+    if (n < 0)
+    {
+        CPLFree(out);
+        return CPLStrdup("");
+    }
+    return out;
+}
+
 /* The JSON chunk of block result r. CPLFree it. */
 static char *json_chunk(const glb_sink *g, const wm_block_result *r, size_t nv,
                         size_t nt, const float min[3], const float max[3],
                         double x0, double y0)
 {
-    return CPLStrdup(CPLSPrintf(
+    return format(
         "{\"asset\":{\"version\":\"2.0\",\"generator\":\"watermesh %s\"},"
         "\"scene\":0,\"scenes\":[{\"nodes\":[0],\"extras\":{"
         "\"origin\":[%.17g,%.17g,0],\"block\":[%lld,%lld],\"crs\":%s,"
@@ -142,7 +160,7 @@ static char *json_chunk(const glb_sink *g, const wm_block_result *r, size_t nv,
         WMVersion(), x0, y0, (long long)r->bx, (long long)r->by, g->crs,
         (long long)r->bx, (long long)r->by, nv, (double)min[0], (double)min[1],
         (double)min[2], (double)max[0], (double)max[1], (double)max[2], 3 * nt,
-        12 * nv, 12 * nv, 12 * nt, 12 * nv + 12 * nt));
+        12 * nv, 12 * nv, 12 * nt, 12 * nv + 12 * nt);
 }
 
 /* Writes the GLB of r to path; FALSE after a CPLError. */
@@ -188,7 +206,13 @@ static int glb_block(void *user, wm_block_result *r)
         char *file = CPLStrdup(name);
         char *path = CPLStrdup(CPLFormFilename(g->folder, file, NULL));
         char *tmp = CPLStrdup(CPLSPrintf("%s.tmp", path));
-        ok = write_glb(g, r, tmp, x0, y0) && VSIRename(tmp, path) == 0;
+        ok = write_glb(g, r, tmp, x0, y0);
+        if (ok && VSIRename(tmp, path) != 0)
+        {
+            CPLError(CE_Failure, CPLE_FileIO,
+                     "gdal_watermesh: cannot move %s to %s.", tmp, path);
+            ok = FALSE;
+        }
         if (!ok)
             VSIUnlink(tmp);
         else if ((ok = wm_grow((void **)&g->entries, &g->cap, g->nentries + 1,

@@ -472,9 +472,9 @@ static int thin_dense(builder *b)
     return TRUE;
 }
 
-/* A number and its unit at *s ("2.5", "8 ft", "3m"), in metres; *s moves
- * past them. */
-static int width_number(const char **s, double *w)
+/* A positive number at *s and the factor of the unit after it ("2.5",
+ * "8 ft", "3m"; *unit 0 when none is written); *s moves past them. */
+static int width_number(const char **s, double *v, double *unit)
 {
     static const struct
     {
@@ -484,51 +484,55 @@ static int width_number(const char **s, double *w)
                  {"meter", 1},     {"m", 1},       {"feet", 0.3048},
                  {"foot", 0.3048}, {"ft", 0.3048}, {"'", 0.3048}};
     char *end = NULL;
-    const double v = CPLStrtod(*s, &end);
-    if (end == *s || !isfinite(v))
+    *v = CPLStrtod(*s, &end);
+    if (end == *s || !isfinite(*v) || !(*v > 0))
         return FALSE;
     while (isspace((unsigned char)*end))
         end++;
-    double f = 1.0;
+    *unit = 0;
     for (size_t i = 0; i < sizeof units / sizeof *units; i++)
         if (EQUALN(end, units[i].name, strlen(units[i].name)))
         {
-            f = units[i].m;
+            *unit = units[i].m;
             end += strlen(units[i].name);
             break;
         }
     while (isspace((unsigned char)*end))
         end++;
     *s = end;
-    *w = v * f;
     return TRUE;
 }
 
-/* One width: a number with an optional unit, "~" before it (about), or a
- * range "5-8" (its mean). */
-static int width_range(const char *s, double *w)
+/* One width: a number, "~" before it (about), or a range "5-8" (its
+ * mean), in metres when a unit is written (*unit its factor; one unit
+ * serves both ends of a range: "10-20 ft"), else as written (*unit 0). */
+static int width_range(const char *s, double *w, double *unit)
 {
     while (isspace((unsigned char)*s) || *s == '~')
         s++;
-    double a, b;
-    if (!width_number(&s, &a))
+    double a, ua, b = 0, ub = 0;
+    if (!width_number(&s, &a, &ua))
         return FALSE;
-    if (*s == '-')
+    const int range = *s == '-';
+    if (range)
     {
         s++;
         while (isspace((unsigned char)*s))
             s++;
-        if (!width_number(&s, &b))
+        if (!width_number(&s, &b, &ub))
             return FALSE;
-        a = (a + b) / 2;
     }
-    *w = a;
-    return *s == '\0' && a > 0;
+    *unit = ub ? ub : ua;
+    const double f = *unit ? *unit : 1;
+    *w = range ? (a * (ua ? ua : f) + b * (ub ? ub : f)) / 2 : a * f;
+    return *s == '\0';
 }
 
 /* Parses a width value as OSM writes them: a number ("12", "2.5",
  * decimal comma "1,5"), with a unit (m, metres, ft, feet, '), about
- * ("~5"), a range ("5-8": the mean) or a list ("3;4": the largest). */
+ * ("~5"), a range ("5-8": the mean) or a list ("3;4": the largest). A
+ * unit written last applies to the numbers written without one
+ * ("10-20 ft", "3;4 ft"). */
 static int parse_width(const char *text, double *w)
 {
     char buf[128];
@@ -538,16 +542,21 @@ static int parse_width(const char *text, double *w)
     char *comma = strchr(buf, ',');
     if (comma && !strchr(buf, '.') && !strchr(comma + 1, ','))
         *comma = '.';
-    double best = 0;
+    double v[16], u[16], last = 1;
     char *save = NULL;
     int n = 0;
     for (char *part = strtok_r(buf, ";", &save); part;
          part = strtok_r(NULL, ";", &save), n++)
-    {
-        double v;
-        if (!width_range(part, &v))
+        if (n == 16 || !width_range(part, &v[n], &u[n]))
             return FALSE;
-        best = v > best ? v : best;
+    if (n > 0 && u[n - 1])
+        last = u[n - 1];
+    double best = 0;
+    for (int i = 0; i < n; i++)
+    {
+        /* v[i] is in metres when its unit was written */
+        const double m = u[i] ? v[i] : v[i] * last;
+        best = m > best ? m : best;
     }
     *w = best;
     return n > 0 && best > 0;
@@ -589,6 +598,14 @@ static int attr_resolve(OGRLayerH h, const char *spec, const char *option,
         return FALSE;
     }
     a->type = OGR_Fld_GetType(OGR_FD_GetFieldDefn(d, a->field));
+    if (a->key && a->type != OFTString)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: RIVERS layer '%s': %s=%s reads a key of a text "
+                 "(hstore) field, and this field is %s.",
+                 OGR_L_GetName(h), option, spec, OGR_GetFieldTypeName(a->type));
+        return FALSE;
+    }
     return TRUE;
 }
 

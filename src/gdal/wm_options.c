@@ -11,6 +11,7 @@
 #include <cpl_string.h>
 #include <cpl_vsi.h>
 
+#include <ctype.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -78,7 +79,8 @@ static int parse_classes(const char *spec, WMParams *p)
     {
         p->class_field = CPLStrdup(spec);
         p->class_field[colon - spec] = '\0';
-        char **items = CSLTokenizeString2(colon + 1, ",", 0);
+        char **items = CSLTokenizeString2(
+            colon + 1, ",", CSLT_STRIPLEADSPACES | CSLT_STRIPENDSPACES);
         for (int i = 0; ok && items[i]; i++)
         {
             char *e = strchr(items[i], '=');
@@ -88,6 +90,8 @@ static int parse_classes(const char *spec, WMParams *p)
                  w <= WM_MAX_WIDTH;
             if (!ok)
                 break;
+            while (e > items[i] && isspace((unsigned char)e[-1]))
+                e--;
             *e = '\0';
             p->class_names = CSLAddString(p->class_names, items[i]);
             p->class_widths = CPLRealloc(
@@ -301,10 +305,11 @@ static int params_parse(CSLConstList opts, WMParams *p)
         long long i = -1, n = 0;
         char tail = 0;
         if (sscanf(shard, "%lld/%lld%c", &i, &n, &tail) != 2 || n < 1 ||
-            i < 0 || i >= n)
+            n > INT32_MAX || i < 0 || i >= n)
         {
             CPLError(CE_Failure, CPLE_IllegalArg,
-                     "WATERMESH: SHARD=%s: expected i/N with 0 <= i < N.",
+                     "WATERMESH: SHARD=%s: expected i/N with 0 <= i < N <= "
+                     "2^31 - 1.",
                      shard);
             return FALSE;
         }

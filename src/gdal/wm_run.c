@@ -550,7 +550,7 @@ void WMShardRange(const WMScene *s, uint64_t total, uint64_t *first,
 {
     const uint64_t i = (uint64_t)s->params.shard,
                    n = s->params.nshards > 0 ? (uint64_t)s->params.nshards : 1;
-    /* i * total / n without overflow for any block count */
+    /* i * total / n without overflow (n < 2^31, total < 2^39) */
     *first = i * (total / n) + i * (total % n) / n;
     *last = (i + 1) * (total / n) + (i + 1) * (total % n) / n;
 }
@@ -601,9 +601,9 @@ CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
         }
         n = raw;
         shard_batch(batch, &n, &seen, first, last);
-        if (n > 0 || done == 0)
+        if (n > 0 || (done == 0 && seen >= last))
         {
-            /* one run even for an empty scene */
+            /* one run even for an empty scene or shard */
             void *scaled =
                 last > first ? GDALCreateScaledProgress(
                                    (double)done / (double)(last - first),
