@@ -340,15 +340,13 @@ static int list_blocks(char **all)
     if (!s)
         return FALSE;
     const double *spat = s->params.have_spat ? s->params.spat : NULL;
-    uint64_t total = 0, first = 0, last = 0, k = 0;
-    int ok = WMBlockCount(s, spat, &total);
-    WMShardRange(s, total, &first, &last);
     WMBlockWalk w;
     WMBlockWalkBegin(&w, s, spat);
     int64_t b[2];
     size_t n = 0;
-    while (ok && (ok = WMBlockWalkNext(&w, b, 1, &n)) && n == 1 && k < last)
-        if (k++ >= first)
+    int ok;
+    while ((ok = WMBlockWalkNext(&w, b, 1, &n)) && n == 1)
+        if (WMShardHas(s, b[0], b[1]))
             printf("%lld %lld\n", (long long)b[0], (long long)b[1]);
     WMBlockWalkEnd(&w);
     WMSceneFree(s);

@@ -727,6 +727,42 @@ static double river_width(OGRFeatureH f, const WMParams *p, const attr_ref *wf,
     return p->width;
 }
 
+int WMLayerScan(OGRLayerH h, const WMParams *p, int rivers, OGREnvelope *env,
+                double *wmax)
+{
+    attr_ref wf = {-1, NULL, OFTString}, cf = {-1, NULL, OFTString};
+    if (rivers && ((p->width_field &&
+                    !attr_resolve(h, p->width_field, "WIDTH_FIELD", &wf)) ||
+                   (p->class_field &&
+                    !attr_resolve(h, p->class_field, "WIDTH_BY_CLASS", &cf))))
+        return FALSE;
+    OGR_L_ResetReading(h);
+    int any = FALSE;
+    OGRFeatureH f;
+    while ((f = OGR_L_GetNextFeature(h)) != NULL)
+    {
+        OGRGeometryH g = OGR_F_GetGeometryRef(f);
+        if (g && !OGR_G_IsEmpty(g))
+        {
+            OGREnvelope e;
+            OGR_G_GetEnvelope(g, &e);
+            if (!any)
+                *env = e;
+            env->MinX = e.MinX < env->MinX ? e.MinX : env->MinX;
+            env->MinY = e.MinY < env->MinY ? e.MinY : env->MinY;
+            env->MaxX = e.MaxX > env->MaxX ? e.MaxX : env->MaxX;
+            env->MaxY = e.MaxY > env->MaxY ? e.MaxY : env->MaxY;
+            any = TRUE;
+            int source;
+            const double w = rivers ? river_width(f, p, &wf, &cf, &source) : 0;
+            *wmax = w > *wmax ? w : *wmax;
+        }
+        OGR_F_Destroy(f);
+    }
+    OGR_L_ResetReading(h);
+    return any ? TRUE : -1;
+}
+
 static OGRGeometryH linear(OGRGeometryH g)
 {
     if (OGR_G_HasCurveGeometry(g, TRUE))
@@ -981,11 +1017,16 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
     if (!s->hSRS)
         goto fail;
     s->unit = s->params.pixel / WM_Q;
-    if (hRivers && !read_rivers(&b, hRivers, &s->params, s->unit, s->hSRS,
-                                &s->core.river_vertices, s->width_source))
-        goto fail;
-    if (hLakes &&
-        !read_lakes(&b, hLakes, s->unit, s->hSRS, &s->core.lake_vertices))
+    int got = !s->params.nshards || WMShardPrepare(s, hRivers, hLakes);
+    got = got &&
+          (!hRivers || read_rivers(&b, hRivers, &s->params, s->unit, s->hSRS,
+                                   &s->core.river_vertices, s->width_source));
+    got = got && (!hLakes || read_lakes(&b, hLakes, s->unit, s->hSRS,
+                                        &s->core.lake_vertices));
+    for (int i = 0; s->params.nshards && i < 2; i++)
+        if ((i ? hLakes : hRivers) != NULL)
+            OGR_L_SetSpatialFilter(i ? hLakes : hRivers, NULL);
+    if (!got)
         goto fail;
     s->core.segs = b.segs;
     s->core.nsegs = b.nsegs;

@@ -61,7 +61,7 @@ typedef struct
     int have_spat;
     double spat[4];         /* xmin, ymin, xmax, ymax in the working CRS */
     int64_t shard, nshards; /* SHARD=i/N: the i-th of N contiguous runs of
-                               the blocks (nshards 0: all) */
+                               the grid's cells (nshards 0: all) */
     int stats;
 } WMParams;
 
@@ -89,6 +89,15 @@ void WMSourcesClose(WMSources *src);
  */
 char **WMReadDescriptor(const char *pszPath);
 
+/** SHARD=i/N's share of the block grid (wm_shard.c): cells [first, last)
+ *  of the nx x ny grid from (gx0, gy0), row-major. */
+typedef struct
+{
+    int on;
+    int64_t gx0, gy0, nx, ny;
+    uint64_t first, last;
+} WMShard;
+
 /** A scene ready to run: the core scene plus what the GDAL side needs. */
 typedef struct
 {
@@ -99,7 +108,25 @@ typedef struct
     struct WMDevice *device; /* where the field is computed (owned) */
     size_t width_source[3];  /* river features whose width came from
                                 WIDTH_FIELD, WIDTH_BY_CLASS, WIDTH */
+    WMShard shard;           /* SHARD's cells (shard.on FALSE: all) */
 } WMScene;
+
+/** SHARD: finds the job's cells of the grid around the layers' extents and
+ *  sets on the layers the spatial filter of those cells grown by the halo
+ *  (the widest river's half-width + 3 pixels); FALSE after a CPLError. */
+int WMShardPrepare(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes);
+
+/** Whether block (bx, by) is the job's (always without SHARD). */
+int WMShardHas(const WMScene *s, int64_t bx, int64_t by);
+
+/** WMBlockCount of the job's blocks (SHARD). */
+int WMShardBlockCount(const WMScene *s, const double *spat, uint64_t *count);
+
+/** One streaming pass over layer h: the envelope of its geometries (layer
+ *  CRS) and, for rivers, the widest width (m) its features take into
+ *  *wmax. TRUE, or -1 when it has no geometry, FALSE after a CPLError. */
+int WMLayerScan(OGRLayerH h, const WMParams *p, int rivers, OGREnvelope *env,
+                double *wmax);
 
 /** A scene's field device (wm_device.c): the C path, or OpenCL with the
  *  state of a DEVICE=AUTO run whose device failed. */
@@ -218,11 +245,6 @@ OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
                          const wm_block_result *r, size_t p, size_t t);
 /** Polygon area in m^2 (exact lattice area, then scaled). */
 double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p);
-
-/** Blocks [*first, *last) of the scene's walk of `total` blocks are
- *  SHARD's (all when no SHARD is set). */
-void WMShardRange(const WMScene *s, uint64_t total, uint64_t *first,
-                  uint64_t *last);
 
 /** Runs every block of a built scene (those touching SPAT, if set, and of
  *  SHARD's range),

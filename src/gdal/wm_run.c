@@ -545,41 +545,43 @@ static void add_stats(WMRunStats *to, const WMRunStats *st)
     to->pairs += st->pairs;
 }
 
-void WMShardRange(const WMScene *s, uint64_t total, uint64_t *first,
-                  uint64_t *last)
-{
-    const uint64_t i = (uint64_t)s->params.shard,
-                   n = s->params.nshards > 0 ? (uint64_t)s->params.nshards : 1;
-    /* i * total / n without overflow (n < 2^31, total < 2^39) */
-    *first = i * (total / n) + i * (total % n) / n;
-    *last = (i + 1) * (total / n) + (i + 1) * (total % n) / n;
-}
-
-/* Keeps the blocks of batch (n pairs) whose place in the walk, counting
- * from *seen, falls in [first, last); advances *seen. */
-static void shard_batch(int64_t *batch, size_t *n, uint64_t *seen,
-                        uint64_t first, uint64_t last)
+/* Keeps the blocks of batch (n pairs) that are the job's (SHARD). */
+static size_t shard_batch(const WMScene *s, int64_t *batch, size_t n)
 {
     size_t kept = 0;
-    for (size_t k = 0; k < *n; k++, (*seen)++)
-        if (*seen >= first && *seen < last)
+    for (size_t k = 0; k < n; k++)
+        if (WMShardHas(s, batch[2 * k], batch[2 * k + 1]))
         {
             batch[2 * kept] = batch[2 * k];
             batch[2 * kept + 1] = batch[2 * k + 1];
             kept++;
         }
-    *n = kept;
+    return kept;
+}
+
+int WMShardBlockCount(const WMScene *s, const double *spat, uint64_t *count)
+{
+    if (!s->shard.on)
+        return WMBlockCount(s, spat, count);
+    int64_t b[2];
+    size_t n = 0;
+    int ok;
+    WMBlockWalk w;
+    WMBlockWalkBegin(&w, s, spat);
+    *count = 0;
+    while ((ok = WMBlockWalkNext(&w, b, 1, &n)) && n == 1)
+        *count += (uint64_t)WMShardHas(s, b[0], b[1]);
+    WMBlockWalkEnd(&w);
+    return ok;
 }
 
 CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
                   GDALProgressFunc pfn, void *pArg)
 {
     const double *spat = s->params.have_spat ? s->params.spat : NULL;
-    uint64_t total = 0, done = 0, first = 0, last = 0;
-    if (!WMBlockCount(s, spat, &total))
+    uint64_t total = 0, done = 0;
+    if (!WMShardBlockCount(s, spat, &total))
         return CE_Failure;
-    WMShardRange(s, total, &first, &last);
-    uint64_t seen = 0; /* blocks of the walk so far, shard or not */
     int64_t *batch = VSIMalloc2(WM_RUN_BATCH, 2 * sizeof(int64_t));
     if (!batch)
     {
@@ -599,17 +601,15 @@ CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
             err = CE_Failure;
             break;
         }
-        n = raw;
-        shard_batch(batch, &n, &seen, first, last);
-        if (n > 0 || (done == 0 && seen >= last))
+        n = shard_batch(s, batch, raw);
+        if (n > 0 || (done == 0 && raw < WM_RUN_BATCH))
         {
-            /* one run even for an empty scene or shard */
+            /* one run even for an empty scene or share */
             void *scaled =
-                last > first ? GDALCreateScaledProgress(
-                                   (double)done / (double)(last - first),
-                                   (double)(done + n) / (double)(last - first),
-                                   pfn, pArg)
-                             : NULL;
+                total ? GDALCreateScaledProgress(
+                            (double)done / (double)total,
+                            (double)(done + n) / (double)total, pfn, pArg)
+                      : NULL;
             WMRunStats st;
             err = WMRunBlocks(s, batch, n, sink, user,
                               scaled ? GDALScaledProgress : pfn,
@@ -618,7 +618,7 @@ CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
             add_stats(&all, &st);
             done += n;
         }
-    } while (err == CE_None && raw == WM_RUN_BATCH && seen < last);
+    } while (err == CE_None && raw == WM_RUN_BATCH);
     WMBlockWalkEnd(&w);
     VSIFree(batch);
     if (err == CE_None && pfn && !pfn(1.0, "", pArg))
