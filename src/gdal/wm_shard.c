@@ -18,6 +18,35 @@
 
 #include <cpl_conv.h>
 #include <math.h>
+#include <string.h>
+
+/* Rectangle in (xmin, ymin, xmax, ymax) between layer h's CRS and the
+ * working CRS dst, either way (to_layer), into out; TRUE as is when they
+ * are the same or the layer has none. FALSE after a CPLError. */
+static int transform_rect(OGRLayerH h, OGRSpatialReferenceH dst, int to_layer,
+                          const double in[4], double out[4])
+{
+    memcpy(out, in, 4 * sizeof *out);
+    OGRSpatialReferenceH src = OGR_L_GetSpatialRef(h);
+    if (!src || OSRIsSame(src, dst))
+        return TRUE;
+    OGRSpatialReferenceH s = OSRClone(src);
+    OSRSetAxisMappingStrategy(s, OAMS_TRADITIONAL_GIS_ORDER);
+    OGRCoordinateTransformationH ct =
+        to_layer ? OCTNewCoordinateTransformation(dst, s)
+                 : OCTNewCoordinateTransformation(s, dst);
+    OSRRelease(s);
+    const int ok =
+        ct && OCTTransformBounds(ct, in[0], in[1], in[2], in[3], &out[0],
+                                 &out[1], &out[2], &out[3], 21);
+    OCTDestroyCoordinateTransformation(ct);
+    if (!ok)
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: SHARD: a rectangle cannot be expressed between "
+                 "the CRS of layer '%s' and the working CRS.",
+                 OGR_L_GetName(h));
+    return ok;
+}
 
 /* Scans layer h (WMLayerScan) and merges the bounds of its geometries,
  * in the working CRS dst, into b (xmin, ymin, xmax, ymax); TRUE, or -1
@@ -29,31 +58,14 @@ static int layer_bounds(OGRLayerH h, const WMParams *p, int rivers,
     const int st = WMLayerScan(h, p, rivers, &e, wmax);
     if (st != TRUE)
         return st;
-    double x0 = e.MinX, y0 = e.MinY, x1 = e.MaxX, y1 = e.MaxY;
-    OGRSpatialReferenceH src = OGR_L_GetSpatialRef(h);
-    if (src && !OSRIsSame(src, dst))
-    {
-        OGRSpatialReferenceH s = OSRClone(src);
-        OSRSetAxisMappingStrategy(s, OAMS_TRADITIONAL_GIS_ORDER);
-        OGRCoordinateTransformationH ct =
-            OCTNewCoordinateTransformation(s, dst);
-        OSRRelease(s);
-        const int ok = ct && OCTTransformBounds(ct, e.MinX, e.MinY, e.MaxX,
-                                                e.MaxY, &x0, &y0, &x1, &y1, 21);
-        OCTDestroyCoordinateTransformation(ct);
-        if (!ok)
-        {
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "WATERMESH: SHARD: the extent of layer '%s' cannot be "
-                     "expressed in the working CRS.",
-                     OGR_L_GetName(h));
-            return FALSE;
-        }
-    }
-    b[0] = fmin(b[0], x0);
-    b[1] = fmin(b[1], y0);
-    b[2] = fmax(b[2], x1);
-    b[3] = fmax(b[3], y1);
+    const double in[4] = {e.MinX, e.MinY, e.MaxX, e.MaxY};
+    double r[4];
+    if (!transform_rect(h, dst, FALSE, in, r))
+        return FALSE;
+    b[0] = fmin(b[0], r[0]);
+    b[1] = fmin(b[1], r[1]);
+    b[2] = fmax(b[2], r[2]);
+    b[3] = fmax(b[3], r[3]);
     return TRUE;
 }
 
@@ -62,28 +74,10 @@ static int layer_bounds(OGRLayerH h, const WMParams *p, int rivers,
 static int filter_layer(OGRLayerH h, OGRSpatialReferenceH dst,
                         const double r[4])
 {
-    double x0 = r[0], y0 = r[1], x1 = r[2], y1 = r[3];
-    OGRSpatialReferenceH src = OGR_L_GetSpatialRef(h);
-    if (src && !OSRIsSame(src, dst))
-    {
-        OGRSpatialReferenceH s = OSRClone(src);
-        OSRSetAxisMappingStrategy(s, OAMS_TRADITIONAL_GIS_ORDER);
-        OGRCoordinateTransformationH ct =
-            OCTNewCoordinateTransformation(dst, s);
-        OSRRelease(s);
-        const int ok = ct && OCTTransformBounds(ct, r[0], r[1], r[2], r[3], &x0,
-                                                &y0, &x1, &y1, 21);
-        OCTDestroyCoordinateTransformation(ct);
-        if (!ok)
-        {
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "WATERMESH: SHARD: the job's area cannot be expressed "
-                     "in the CRS of layer '%s'.",
-                     OGR_L_GetName(h));
-            return FALSE;
-        }
-    }
-    OGR_L_SetSpatialFilterRect(h, x0, y0, x1, y1);
+    double f[4];
+    if (!transform_rect(h, dst, TRUE, r, f))
+        return FALSE;
+    OGR_L_SetSpatialFilterRect(h, f[0], f[1], f[2], f[3]);
     return TRUE;
 }
 
