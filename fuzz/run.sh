@@ -26,7 +26,8 @@ cflags="-g -O1 -std=c11 -D_GNU_SOURCE -fno-omit-frame-pointer $san
 objs=""
 for f in "$src"/src/core/*.c "$src"/src/gdal/wm_options.c \
   "$src"/src/gdal/wm_ingest.c "$src"/src/gdal/wm_device.c \
-  "$src"/src/gdal/wm_run.c "$src"/src/cl/wm_cl_none.c; do
+  "$src"/src/gdal/wm_run.c "$src"/src/gdal/wm_shard.c \
+  "$src"/src/cl/wm_cl_none.c; do
   o="$out/obj/$(basename "$f" .c).o"
   # rebuilt when its source or any header is newer
   if [ ! -f "$o" ] || [ "$f" -nt "$o" ] ||
