@@ -89,10 +89,13 @@ def test_failure_reported(qgis_env, tmp_path):
     assert p.returncode != 0 and 'WIDTH_BY_CLASS=nonsense' in text, text[-2000:]
 
 
-PYQGIS_SELECTION = r'''
-import sys
-from qgis.core import (QgsApplication, QgsProcessingFeatureSourceDefinition, QgsProject,
-                       QgsVectorLayer, QgsFeatureRequest)
+# what both PyQGIS scripts start with: QGIS, Processing and the provider
+# (argv: plugin folder, input, water output, mesh output)
+PYQGIS_PREAMBLE = r'''
+import os, sys, time
+from qgis.core import (QgsApplication, QgsFeatureRequest, QgsProcessingContext,
+                       QgsProcessingException, QgsProcessingFeatureSourceDefinition,
+                       QgsProcessingFeedback, QgsProject, QgsVectorLayer)
 app = QgsApplication([], False)
 app.initQgis()
 sys.path.insert(0, '/usr/share/qgis/python/plugins')
@@ -103,6 +106,21 @@ Processing.initialize()
 from watermesh.provider import WatermeshProvider
 provider = WatermeshProvider()  # kept: the registry does not own it
 QgsApplication.processingRegistry().addProvider(provider)
+'''
+
+
+def run_pyqgis(qgis_env, tmp_path, body):
+    """Runs PYQGIS_PREAMBLE + body on Andorra; (process, water, mesh)."""
+    script = tmp_path / 'script.py'
+    script.write_text(PYQGIS_PREAMBLE + body)
+    water, mesh = str(tmp_path / 'water.gpkg'), str(tmp_path / 'mesh.gpkg')
+    p = subprocess.run([sys.executable, str(script), os.path.join(REPO, 'qgis'), ANDORRA,
+                        water, mesh], env=qgis_env, stdout=subprocess.PIPE,
+                       stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
+    return p, water, mesh
+
+
+PYQGIS_SELECTION = r'''
 src = QgsVectorLayer(sys.argv[2] + '|layername=rivers', 'rivers', 'ogr')
 mem = src.materialize(QgsFeatureRequest())
 QgsProject.instance().addMapLayer(mem)
@@ -115,7 +133,6 @@ print('RESULT', res['WATER'], res['MESH'])
 QgsProject.instance().clear()
 QgsApplication.processingRegistry().removeProvider(provider)
 sys.stdout.flush()
-import os
 os._exit(0)  # PyQGIS 3.22 may crash in exitQgis after processing; nothing left to do
 '''
 
@@ -124,12 +141,7 @@ def test_memory_layer_selection(qgis_env, tmp_path):
     """A memory layer's selection reaches the command (exported to a
     temporary GeoPackage): the result equals the CLI's on a file holding
     just the selected rivers."""
-    script = tmp_path / 'sel.py'
-    script.write_text(PYQGIS_SELECTION)
-    water, mesh = str(tmp_path / 'water.gpkg'), str(tmp_path / 'mesh.gpkg')
-    p = subprocess.run([sys.executable, str(script), os.path.join(REPO, 'qgis'), ANDORRA,
-                        water, mesh], env=qgis_env, stdout=subprocess.PIPE,
-                       stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
+    p, water, mesh = run_pyqgis(qgis_env, tmp_path, PYQGIS_SELECTION)
     assert p.returncode == 0 and 'RESULT' in p.stdout, p.stdout[-2000:] + p.stderr[-2000:]
     n, total = [int(x) for x in p.stdout.split('SELECTED ')[1].split()[:2]]
     assert 0 < n < total
@@ -148,18 +160,6 @@ def test_memory_layer_selection(qgis_env, tmp_path):
 
 
 PYQGIS_CANCEL = r'''
-import os, sys, time
-from qgis.core import (QgsApplication, QgsProcessingContext, QgsProcessingException,
-                       QgsProcessingFeedback)
-app = QgsApplication([], False)
-app.initQgis()
-sys.path.insert(0, '/usr/share/qgis/python/plugins')
-sys.path.insert(0, sys.argv[1])
-from processing.core.Processing import Processing
-Processing.initialize()
-from watermesh.provider import WatermeshProvider
-provider = WatermeshProvider()
-QgsApplication.processingRegistry().addProvider(provider)
 alg = QgsApplication.processingRegistry().createAlgorithmById('watermesh:watermesh')
 
 class Feedback(QgsProcessingFeedback):
@@ -186,12 +186,7 @@ os._exit(0)
 def test_cancel_stops_the_command(qgis_env, tmp_path):
     """Cancelling through the feedback stops gdal_watermesh at once (a run
     of several seconds ends within one) and writes no output."""
-    script = tmp_path / 'cancel.py'
-    script.write_text(PYQGIS_CANCEL)
-    water, mesh = str(tmp_path / 'water.gpkg'), str(tmp_path / 'mesh.gpkg')
-    p = subprocess.run([sys.executable, str(script), os.path.join(REPO, 'qgis'), ANDORRA,
-                        water, mesh], env=qgis_env, stdout=subprocess.PIPE,
-                       stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
+    p, water, mesh = run_pyqgis(qgis_env, tmp_path, PYQGIS_CANCEL)
     out = p.stdout
     assert p.returncode == 0 and 'OK False' in out, out[-2000:] + p.stderr[-2000:]
     assert float(out.split('SECONDS ')[1].split()[0]) < 2.0, out
