@@ -513,8 +513,9 @@ static double seg_dist2(double x, double y, double ax, double ay, double bx,
 }
 
 /* Whether corner p of the union lies farther than a quarter pixel from
- * every segment the samples of its cell (c, r) give (crossings
- * interpolated on the cell's sides; a saddle's two pairings both count):
+ * every segment the samples of its cell (c, r) give (the crossings
+ * contour.c puts on the cell's sides, wm_contour_crossing; a saddle's two
+ * pairings both count):
  * crease.c recovers a corner only that close to a segment. Such a cell
  * is ambiguous: a cell of one class (an island or a pond smaller than a
  * pixel), or a land triangle at a lake's inner corner that a sub-pixel
@@ -522,27 +523,27 @@ static double seg_dist2(double x, double y, double ax, double ay, double bx,
  * which is water. */
 static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
 {
-    static const int cx[4] = {0, 1, 1, 0}, cy[4] = {0, 0, 1, 1};
     float v[4];
     wm_field_cell(f, c, r, v);
-    double x[4], y[4];
+    const int32_t X = c * WM_Q, Y = r * WM_Q;
+    /* the sides, counter-clockwise from the bottom, as contour.c draws
+     * their crossings: from the lower sample, (x, y, direction) */
+    const int a[4] = {0, 1, 3, 0}, b[4] = {1, 2, 2, 3};
+    const int32_t sx[4] = {X, X + WM_Q, X, X}, sy[4] = {Y, Y, Y + WM_Q, Y};
+    const int dir[4] = {0, 1, 0, 1};
+    wm_pt q[4];
     int n = 0;
-    for (int a = 0; a < 4; a++)
-    {
-        const int b = (a + 1) & 3;
-        if ((v[a] <= 0) == (v[b] <= 0))
-            continue;
-        const double t = (double)v[a] / ((double)v[a] - (double)v[b]);
-        x[n] = (cx[a] + t * (cx[b] - cx[a])) * WM_Q;
-        y[n++] = (cy[a] + t * (cy[b] - cy[a])) * WM_Q;
-    }
-    const double px = p.x - (double)c * WM_Q, py = p.y - (double)r * WM_Q;
+    for (int k = 0; k < 4; k++)
+        if ((v[a[k]] <= 0) != (v[b[k]] <= 0))
+            q[n++] =
+                wm_contour_crossing(v[a[k]], v[b[k]], sx[k], sy[k], dir[k]);
     const double lim = (double)WM_Q / 4;
     /* a saddle's pairings join neighbouring sides, never opposite ones */
     for (int i = 0; i < n; i++)
         for (int j = i + 1; j < n; j++)
             if (!(n == 4 && j == i + 2) &&
-                seg_dist2(px, py, x[i], y[i], x[j], y[j]) <= lim * lim)
+                seg_dist2(p.x, p.y, q[i].x, q[i].y, q[j].x, q[j].y) <=
+                    lim * lim)
                 return 0;
     return 1;
 }

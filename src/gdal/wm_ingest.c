@@ -1023,9 +1023,10 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
                                    &s->core.river_vertices, s->width_source));
     got = got && (!hLakes || read_lakes(&b, hLakes, s->unit, s->hSRS,
                                         &s->core.lake_vertices));
-    for (int i = 0; s->params.nshards && i < 2; i++)
-        if ((i ? hLakes : hRivers) != NULL)
-            OGR_L_SetSpatialFilter(i ? hLakes : hRivers, NULL);
+    if (s->params.nshards && hRivers) /* the layers are the caller's */
+        OGR_L_SetSpatialFilter(hRivers, NULL);
+    if (s->params.nshards && hLakes)
+        OGR_L_SetSpatialFilter(hLakes, NULL);
     if (!got)
         goto fail;
     s->core.segs = b.segs;
