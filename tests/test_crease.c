@@ -190,5 +190,47 @@ int main(void)
         wm_rings_free(&r);
         wm_scene_free(&s);
     }
+    /* a narrow river leaving a lake through its edge on x = 64 px, a line
+     * of the 16-pixel grid corners.c buckets primitives in: the crossing
+     * of the bank and the edge computed from the bank may fall a few ulps
+     * into the cell on the left, which the edge does not reach; the
+     * corner was then never a candidate and stayed cut by 0.6 px (the
+     * twolakes scene of issue 12, 0.25 m pixels). Eight offsets of the
+     * river. */
+    for (int k = 0; k < 8; k++)
+    {
+        wm_scene s;
+        su_init(&s, 128);
+        const double dy = k / 8.0;
+        const double lake[] = {-8, 20, 64, 20, 64, 54, -8, 54};
+        const int cnt[] = {4};
+        const double rv[] = {-68.97150951, 12.34909 + dy, 170.54016,
+                             27.65094 + dy};
+        const double rr = 0.41774839;
+        su_lake(&s, lake, cnt, 1);
+        su_river(&s, rv, 2, rr);
+        su_finish(&s);
+        /* the corner: the river's upper bank at x = 64 */
+        const double m = (rv[3] - rv[1]) / (rv[2] - rv[0]);
+        const double cx = 64.0 * WM_Q,
+                     cy = (rv[1] + (64 - rv[0]) * m + rr * sqrt(1 + m * m)) *
+                          WM_Q;
+        wm_field f;
+        wm_rings r = {0};
+        wm_field_compute(&s, 0, 0, 129, 129, NULL, &f, NULL);
+        wm_contour_extract(&f, &r, NULL);
+        const double before = nearest_edge(&r, cx, cy) / WM_Q;
+        TAP_EQ(wm_crease_recover(&s, &f, 0, 0, &r, NULL), WM_OK,
+               "recover at a lake edge on a grid line");
+        const double after = nearest_edge(&r, cx, cy) / WM_Q;
+        TAP_OK(after < 0.25,
+               "bank leaving a lake edge on x = 64 px (+%g px): corner %.3f "
+               "px from the sampled rings, %.4f px after",
+               dy, before, after);
+        TAP_OK(ring_meetings(&r) == 0, "rings still simple and disjoint");
+        wm_field_free(&f);
+        wm_rings_free(&r);
+        wm_scene_free(&s);
+    }
     return TAP_DONE();
 }

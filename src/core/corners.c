@@ -285,6 +285,13 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
                     const int nh = intersect(p, q, hit);
                     for (int h = 0; h < nh; h++)
                     {
+                        /* the crossing lies in both boxes; rounding may
+                         * put it a few ulps out, into a cell the pair
+                         * does not share, where it would never be seen */
+                        hit[h].x = fmin(fmax(hit[h].x, fmax(bp[0], bq[0])),
+                                        fmin(bp[2], bq[2]));
+                        hit[h].y = fmin(fmax(hit[h].y, fmax(bp[1], bq[1])),
+                                        fmin(bp[3], bq[3]));
                         if (floor(hit[h].x / PC) != (double)cx ||
                             floor(hit[h].y / PC) != (double)cy)
                             continue;
