@@ -32,13 +32,41 @@ typedef struct
     int circle;
     uint32_t item; /* its input item, or NO_ITEM: a circle two consecutive
                       segments share */
+    uint32_t seg;  /* river primitives: the slot in probe->segs of their
+                      segment (a shared circle: the later one's); lake
+                      edges: NO_ITEM */
 } prim;
+
+/* A crossing found: where, and whether it joins two consecutive segments
+ * of one line (the inside of a bend). */
+typedef struct
+{
+    wm_pt p;
+    int joint;
+} hit_pt;
 
 #define NO_ITEM UINT32_MAX
 
-static int cmp_pt(const void *a, const void *b)
+static int cmp_hit(const void *a, const void *b)
 {
-    return wm_pt_cmp(*(const wm_pt *)a, *(const wm_pt *)b);
+    return wm_pt_cmp(((const hit_pt *)a)->p, ((const hit_pt *)b)->p);
+}
+
+/* Whether river primitives p and q come from one segment or from two
+ * consecutive segments of one line (slots i, i + 1 sharing a vertex). */
+static int joint(const wm_probe *in, const prim *p, const prim *q)
+{
+    if (p->seg == NO_ITEM || q->seg == NO_ITEM)
+        return 0;
+    const uint32_t i = p->seg < q->seg ? p->seg : q->seg,
+                   j = p->seg < q->seg ? q->seg : p->seg;
+    if (i == j)
+        return 1;
+    if (j != i + 1)
+        return 0;
+    const wm_river_seg *a = &in->s->segs[in->segs[i]],
+                       *b = &in->s->segs[in->segs[j]];
+    return a->bx == b->ax && a->by == b->ay;
 }
 
 /* ---- candidate corners: intersections of primitives ------------------- */
@@ -154,7 +182,7 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
     wm_cells pg;       /* primitives by cell */
     double *pb = NULL; /* their boxes */
     memset(&pg, 0, sizeof pg);
-    wm_pt *cand = NULL; /* primitive crossings, then the kept ones */
+    hit_pt *cand = NULL; /* primitive crossings, then the kept ones */
     size_t ncand = 0, candcap = 0, nkept = 0;
     wm_probe *in = probe;
     const wm_scene *s = in->s;
@@ -181,10 +209,10 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
         if (l > 0)
         {
             const double nx = -dy / l * q->r, ny = dx / l * q->r;
-            p[np++] =
-                (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, in->segs[i]};
-            p[np++] =
-                (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, in->segs[i]};
+            p[np++] = (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0,
+                             in->segs[i], (uint32_t)i};
+            p[np++] = (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0,
+                             in->segs[i], (uint32_t)i};
         }
         /* end circles, each once: the start circle of a segment that
          * continues the previous one (same vertex, same radius) is that
@@ -192,11 +220,14 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
          * the primitives of both, as the two copies did) */
         const wm_river_seg *prev = i > 0 ? &s->segs[in->segs[i - 1]] : NULL;
         if (prev && prev->bx == q->ax && prev->by == q->ay && prev->r == q->r)
+        {
             pr[npr - 1].item = NO_ITEM;
+            pr[npr - 1].seg = (uint32_t)i;
+        }
         else
-            p[np++] = (prim){ax, ay, q->r, 0, 1, in->segs[i]};
+            p[np++] = (prim){ax, ay, q->r, 0, 1, in->segs[i], (uint32_t)i};
         if (l > 0)
-            p[np++] = (prim){bx2, by2, q->r, 0, 1, in->segs[i]};
+            p[np++] = (prim){bx2, by2, q->r, 0, 1, in->segs[i], (uint32_t)i};
         for (int k = 0; k < np; k++)
             if (!wm_push((void **)&pr, &npr, &prcap, &p[k], sizeof *p))
                 goto nomem;
@@ -212,7 +243,8 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
                       (double)(q->bx - in->X0),
                       (double)(q->by - in->Y0),
                       0,
-                      (uint32_t)(s->nsegs + e)};
+                      (uint32_t)(s->nsegs + e),
+                      NO_ITEM};
             double b[4];
             prim_box(&p, b);
             if (b[2] < lo || b[0] > hi || b[3] < lo || b[1] > hi)
@@ -298,8 +330,9 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
                         if (!(hit[h].x >= 1 && hit[h].x <= S - 1 &&
                               hit[h].y >= 1 && hit[h].y <= S - 1))
                             continue; /* strictly inside the block */
-                        const wm_pt c = {round_pos(hit[h].x),
-                                         round_pos(hit[h].y)};
+                        const hit_pt c = {{round_pos(hit[h].x),
+                                           round_pos(hit[h].y)},
+                                          joint(in, p, q)};
                         if (!wm_push((void **)&cand, &ncand, &candcap, &c,
                                      sizeof c))
                             goto nomem;
@@ -314,22 +347,31 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
     for (size_t i = 0; i < ncand; i++)
     {
         if (i + PREFETCH < ncand)
-            wm_field_prefetch(f, sample_of(cand[i + PREFETCH].x),
-                              sample_of(cand[i + PREFETCH].y));
-        const wm_pt c = cand[i];
+            wm_field_prefetch(f, sample_of(cand[i + PREFETCH].p.x),
+                              sample_of(cand[i + PREFETCH].p.y));
+        const wm_pt c = cand[i].p;
         if (fabsf(wm_field_at(f, sample_of(c.x), sample_of(c.y))) <= 0.75f)
-            cand[nkept++] = c;
+            cand[nkept++] = cand[i];
     }
     ncand = nkept;
     if (ncand > 1)
-        qsort(cand, ncand, sizeof *cand, cmp_pt);
+        qsort(cand, ncand, sizeof *cand, cmp_hit);
+    in->corner = malloc((ncand + 1) * sizeof *in->corner);
+    in->corner_joint = malloc(ncand + 1);
+    if (!in->corner || !in->corner_joint)
+        goto nomem;
     size_t nu = 0;
     for (size_t i = 0; i < ncand; i++)
-        if (nu == 0 || !wm_pt_eq(cand[i], cand[nu - 1]))
-            cand[nu++] = cand[i];
-    in->corner = cand;
+    {
+        if (nu > 0 && wm_pt_eq(cand[i].p, in->corner[nu - 1]))
+        {
+            in->corner_joint[nu - 1] &= (uint8_t)cand[i].joint;
+            continue;
+        }
+        in->corner[nu] = cand[i].p;
+        in->corner_joint[nu++] = (uint8_t)cand[i].joint;
+    }
     in->ncorner = nu;
-    cand = NULL;
     goto cleanup;
 nomem:
     st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory finding corners");

@@ -752,6 +752,7 @@ void wm_probe_free(wm_probe *p)
     free(p->iv);
     free(p->tg);
     free(p->corner);
+    free(p->corner_joint);
     const wm_scene *s = p->s;
     memset(p, 0, sizeof *p);
     p->s = s;

@@ -51,6 +51,10 @@ extern "C"
          *  block, near the boundary, lattice-snapped, sorted, distinct
          *  (owned; found once by wm_corners_find) */
         wm_pt *corner;
+        /* per corner: 1 when every crossing found there is of two
+         *  consecutive segments of one line (the inside of a bend), 0 when
+         *  not (owned, as `corner`) */
+        uint8_t *corner_joint;
         size_t ncorner;
         int corners_found;
         /* scratch of a query (owned): per polygon slot, and growable lists */

@@ -548,6 +548,55 @@ static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
     return 1;
 }
 
+/* Seeds the corners of the union in the cells holding two or more of
+ * them, one at least not at the inside of a bend of one line
+ * (probe->corner_joint), and makes those cells ambiguous. A boundary
+ * component inside one cell meets no edge of the sample grid; it is
+ * bounded by arcs of two inputs at least (a lake ring or a river segment
+ * smaller than two pixels is seeded as an input), so its corners, two or
+ * more, all lie in the cell, and one of them joins two primitives that
+ * are not consecutive segments of a line (two capsules sharing an end
+ * enclose nothing). This holds wherever the component lies in the cell,
+ * even within a quarter pixel of the cell's segment (off_contour). */
+static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
+{
+    const size_t n = probe->ncorner;
+    if (n < 2)
+        return 1;
+    seedkey *o = malloc(n * sizeof *o);
+    if (!o)
+        return 0;
+    for (size_t i = 0; i < n; i++)
+        o[i] = (seedkey){cell_key(f, probe->corner[i].x / WM_Q,
+                                  probe->corner[i].y / WM_Q),
+                         i};
+    qsort(o, n, sizeof *o, cmp_seedkey);
+    int ok = 1;
+    for (size_t a = 0, z; ok && a < n; a = z)
+    {
+        for (z = a + 1; z < n && o[z].key == o[a].key; z++)
+            ;
+        if (z - a < 2)
+            continue;
+        size_t kept = 0;
+        int other = 0;
+        for (size_t i = a; i < z; i++)
+        {
+            const size_t k = o[i].i;
+            if (buried(probe, probe->corner[k]))
+                o[i].i = SIZE_MAX; /* not a seed */
+            else
+                kept++, other |= !probe->corner_joint[k];
+        }
+        for (size_t i = a; ok && kept >= 2 && other && i < z; i++)
+            if (o[i].i != SIZE_MAX)
+                ok = add_seed(h, f, probe->corner[o[i].i].x,
+                              probe->corner[o[i].i].y, 1);
+    }
+    free(o);
+    return ok;
+}
+
 /* Seeds the cells of the inputs smaller than two pixels: lake rings (the
  * runs of edges of a polygon that close) and river segments with their
  * radius, by their first point; the tips of thin caps; and the corners of
@@ -604,7 +653,7 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
             !add_seed(h, f, p.x, p.y, 1))
             return 0;
     }
-    return 1;
+    return crowded_cells(h, f, probe);
 }
 
 /* Seeds the other corners of the union in the cells ambiguous for other
