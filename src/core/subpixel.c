@@ -36,9 +36,9 @@
  * of one class, where the balls leave a feasible part, so the edge is
  * searched exactly. A component that meets no edge lies inside one cell;
  * seeds reach it: a point of each input smaller than two pixels, the tip
- * of each river cap narrower than 1.5 pixels, and each corner of the union
- * (two input boundaries crossing, corners.c) in a cell whose four samples
- * are of one class. What stays unseen: three crossings on an edge whose
+ * of each river cap narrower than 1.5 pixels, the corners of the union
+ * (two input boundaries crossing, corners.c) off their cell's segment, and
+ * those of a cell holding two or more (crowded_cells). What stays unseen: three crossings on an edge whose
  * samples differ that is not loose, and a feature narrower than the
  * lattice's rounding (block.c drops rings thinner than 1 unit, 2A/P).
  *
