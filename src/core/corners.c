@@ -37,8 +37,8 @@ typedef struct
                       edges: NO_ITEM */
 } prim;
 
-/* A crossing found: where, and whether it joins two consecutive segments
- * of one line (the inside of a bend). */
+/* A crossing found: where, and whether it joins one segment's primitives
+ * or two segments sharing an end (joint). */
 typedef struct
 {
     wm_pt p;
@@ -53,20 +53,21 @@ static int cmp_hit(const void *a, const void *b)
 }
 
 /* Whether river primitives p and q come from one segment or from two
- * consecutive segments of one line (slots i, i + 1 sharing a vertex). */
+ * segments sharing an end (the inside of a bend, or where lines meet end
+ * to end): a property of the segments' coordinates, not of their order, so
+ * a job reading its features in another order finds the same. */
 static int joint(const wm_probe *in, const prim *p, const prim *q)
 {
     if (p->seg == NO_ITEM || q->seg == NO_ITEM)
         return 0;
-    const uint32_t i = p->seg < q->seg ? p->seg : q->seg,
-                   j = p->seg < q->seg ? q->seg : p->seg;
-    if (i == j)
+    if (p->seg == q->seg)
         return 1;
-    if (j != i + 1)
-        return 0;
-    const wm_river_seg *a = &in->s->segs[in->segs[i]],
-                       *b = &in->s->segs[in->segs[j]];
-    return a->bx == b->ax && a->by == b->ay;
+    const wm_river_seg *a = &in->s->segs[in->segs[p->seg]],
+                       *b = &in->s->segs[in->segs[q->seg]];
+    return (a->ax == b->ax && a->ay == b->ay) ||
+           (a->ax == b->bx && a->ay == b->by) ||
+           (a->bx == b->ax && a->by == b->ay) ||
+           (a->bx == b->bx && a->by == b->by);
 }
 
 /* ---- candidate corners: intersections of primitives ------------------- */

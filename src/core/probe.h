@@ -51,9 +51,9 @@ extern "C"
          *  block, near the boundary, lattice-snapped, sorted, distinct
          *  (owned; found once by wm_corners_find) */
         wm_pt *corner;
-        /* per corner: 1 when every crossing found there is of two
-         *  consecutive segments of one line (the inside of a bend), 0 when
-         *  not (owned, as `corner`) */
+        /* per corner: 1 when every crossing found there is of one segment
+         *  or two sharing an end (a bend, lines meeting end to end), 0
+         *  when not (owned, as `corner`) */
         uint8_t *corner_joint;
         size_t ncorner;
         int corners_found;

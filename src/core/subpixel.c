@@ -549,15 +549,17 @@ static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
 }
 
 /* Seeds the corners of the union in the cells holding two or more of
- * them, one at least not at the inside of a bend of one line
- * (probe->corner_joint), and makes those cells ambiguous. A boundary
- * component inside one cell meets no edge of the sample grid; it is
- * bounded by arcs of two inputs at least (a lake ring or a river segment
- * smaller than two pixels is seeded as an input), so its corners, two or
- * more, all lie in the cell, and one of them joins two primitives that
- * are not consecutive segments of a line (two capsules sharing an end
- * enclose nothing). This holds wherever the component lies in the cell,
- * even within a quarter pixel of the cell's segment (off_contour). */
+ * them, one at least not joining two segments that share an end
+ * (probe->corner_joint: the inside of a bend), and makes those cells
+ * ambiguous. A boundary component inside one cell meets no edge of the
+ * sample grid; unless it is an input smaller than two pixels (seeded as
+ * such) it is bounded by arcs of two inputs at least, so its corners, two
+ * or more, all lie in the cell, and one of them joins segments sharing no
+ * end (capsules sharing an end are convex and meet, so they enclose
+ * nothing; a loop of three segments each sharing ends with the next is
+ * the exception, see architecture.md). This holds wherever the component
+ * lies in the cell, even within a quarter pixel of the cell's segment
+ * (off_contour). */
 static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
     const size_t n = probe->ncorner;
