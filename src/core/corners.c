@@ -29,7 +29,8 @@
 typedef struct
 {
     double x0, y0, x1, y1; /* segment, or circle centre (x0,y0) radius x1 */
-    int circle;
+    int circle; /* 0: an offset line; 1, 2: the circle at its segment's
+                   first, second end */
     uint32_t item; /* its input item, or NO_ITEM: a circle two consecutive
                       segments share */
     uint32_t seg;  /* river primitives: the slot in probe->segs of their
@@ -52,22 +53,37 @@ static int cmp_hit(const void *a, const void *b)
     return wm_pt_cmp(((const hit_pt *)a)->p, ((const hit_pt *)b)->p);
 }
 
-/* Whether river primitives p and q come from one segment or from two
- * segments sharing an end (the inside of a bend, or where lines meet end
- * to end): a property of the segments' coordinates, not of their order, so
- * a job reading its features in another order finds the same. */
+/* The lattice points a river primitive ends at: its segment's two ends
+ * for an offset line, its centre for a circle. */
+static int prim_ends(const wm_probe *in, const prim *p, int64_t e[2][2])
+{
+    const wm_river_seg *g = &in->s->segs[in->segs[p->seg]];
+    const int64_t a[2] = {g->ax, g->ay}, b[2] = {g->bx, g->by};
+    int n = 0;
+    if (p->circle != 2)
+        memcpy(e[n++], a, sizeof a);
+    if (p->circle != 1)
+        memcpy(e[n++], b, sizeof b);
+    return n;
+}
+
+/* Whether river primitives p and q come from one segment or from
+ * capsules sharing an end (the inside of a bend, lines meeting end to
+ * end): a property of the coordinates, not of the order of the segments,
+ * so a job reading its features in another order finds the same. */
 static int joint(const wm_probe *in, const prim *p, const prim *q)
 {
     if (p->seg == NO_ITEM || q->seg == NO_ITEM)
         return 0;
     if (p->seg == q->seg)
         return 1;
-    const wm_river_seg *a = &in->s->segs[in->segs[p->seg]],
-                       *b = &in->s->segs[in->segs[q->seg]];
-    return (a->ax == b->ax && a->ay == b->ay) ||
-           (a->ax == b->bx && a->ay == b->by) ||
-           (a->bx == b->ax && a->by == b->ay) ||
-           (a->bx == b->bx && a->by == b->by);
+    int64_t ep[2][2], eq[2][2];
+    const int np = prim_ends(in, p, ep), nq = prim_ends(in, q, eq);
+    for (int i = 0; i < np; i++)
+        for (int j = 0; j < nq; j++)
+            if (ep[i][0] == eq[j][0] && ep[i][1] == eq[j][1])
+                return 1;
+    return 0;
 }
 
 /* ---- candidate corners: intersections of primitives ------------------- */
@@ -221,14 +237,11 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
          * the primitives of both, as the two copies did) */
         const wm_river_seg *prev = i > 0 ? &s->segs[in->segs[i - 1]] : NULL;
         if (prev && prev->bx == q->ax && prev->by == q->ay && prev->r == q->r)
-        {
             pr[npr - 1].item = NO_ITEM;
-            pr[npr - 1].seg = (uint32_t)i;
-        }
         else
             p[np++] = (prim){ax, ay, q->r, 0, 1, in->segs[i], (uint32_t)i};
         if (l > 0)
-            p[np++] = (prim){bx2, by2, q->r, 0, 1, in->segs[i], (uint32_t)i};
+            p[np++] = (prim){bx2, by2, q->r, 0, 2, in->segs[i], (uint32_t)i};
         for (int k = 0; k < np; k++)
             if (!wm_push((void **)&pr, &npr, &prcap, &p[k], sizeof *p))
                 goto nomem;

@@ -548,30 +548,30 @@ static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
     return 1;
 }
 
-/* Seeds the corners of the union in the cells holding two or more of
- * them, one at least not joining two segments that share an end
- * (probe->corner_joint: the inside of a bend), and makes those cells
- * ambiguous. A boundary component inside one cell meets no edge of the
- * sample grid; unless it is an input smaller than two pixels (seeded as
- * such) it is bounded by arcs of two inputs at least, so its corners, two
- * or more, all lie in the cell, and one of them joins segments sharing no
- * end (capsules sharing an end are convex and meet, so they enclose
- * nothing; a loop of three segments each sharing ends with the next is
- * the exception, see architecture.md). This holds wherever the component
- * lies in the cell, even within a quarter pixel of the cell's segment
- * (off_contour). */
+/* Seeds the corners of the union that join two capsules sharing no end
+ * (probe->corner_joint is 0) in the cells holding two or more of them,
+ * and makes those cells ambiguous. A boundary component inside one cell
+ * meets no edge of the sample grid; unless it is an input smaller than two
+ * pixels (seeded as such) it is bounded by arcs of several capsules and
+ * lake edges, and all its corners lie in the cell. Group the capsules
+ * that share ends: two capsules sharing an end are convex and meet, so a
+ * group of them encloses nothing unless it closes a loop (the exception,
+ * see architecture.md); a component's boundary that goes from one group
+ * to another comes back, so it has two corners at least joining capsules
+ * that share no end. This holds wherever the component lies in the cell,
+ * even within a quarter pixel of the cell's segment (off_contour), and
+ * does not depend on which corners of shared ends a job finds. */
 static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
-    const size_t n = probe->ncorner;
-    if (n < 2)
-        return 1;
-    seedkey *o = malloc(n * sizeof *o);
+    seedkey *o = malloc((probe->ncorner + 1) * sizeof *o);
     if (!o)
         return 0;
-    for (size_t i = 0; i < n; i++)
-        o[i] = (seedkey){cell_key(f, probe->corner[i].x / WM_Q,
-                                  probe->corner[i].y / WM_Q),
-                         i};
+    size_t n = 0;
+    for (size_t i = 0; i < probe->ncorner; i++)
+        if (!probe->corner_joint[i])
+            o[n++] = (seedkey){cell_key(f, probe->corner[i].x / WM_Q,
+                                        probe->corner[i].y / WM_Q),
+                               i};
     qsort(o, n, sizeof *o, cmp_seedkey);
     int ok = 1;
     for (size_t a = 0, z; ok && a < n; a = z)
@@ -581,16 +581,14 @@ static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
         if (z - a < 2)
             continue;
         size_t kept = 0;
-        int other = 0;
         for (size_t i = a; i < z; i++)
         {
-            const size_t k = o[i].i;
-            if (buried(probe, probe->corner[k]))
+            if (buried(probe, probe->corner[o[i].i]))
                 o[i].i = SIZE_MAX; /* not a seed */
             else
-                kept++, other |= !probe->corner_joint[k];
+                kept++;
         }
-        for (size_t i = a; ok && kept >= 2 && other && i < z; i++)
+        for (size_t i = a; ok && kept >= 2 && i < z; i++)
             if (o[i].i != SIZE_MAX)
                 ok = add_seed(h, f, probe->corner[o[i].i].x,
                               probe->corner[o[i].i].y, 1);
