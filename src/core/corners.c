@@ -34,8 +34,8 @@ typedef struct
     uint32_t item; /* its input item, or NO_ITEM: a circle two consecutive
                       segments share */
     uint32_t seg;  /* river primitives: the slot in probe->segs of their
-                      segment (a shared circle: the later one's); lake
-                      edges: NO_ITEM */
+                      segment (a shared circle: the earlier one's, whose
+                      second end it is); lake edges: NO_ITEM */
 } prim;
 
 /* A crossing found: where, and whether it joins one segment's primitives
