@@ -29,8 +29,8 @@
 typedef struct
 {
     double x0, y0, x1, y1; /* segment, or circle centre (x0,y0) radius x1 */
-    int circle; /* 0: an offset line; 1, 2: the circle at its segment's
-                   first, second end */
+    int circle;    /* 0: an offset line; 1, 2: the circle at its segment's
+                      first, second end */
     uint32_t item; /* its input item, or NO_ITEM: a circle two consecutive
                       segments share */
     uint32_t seg;  /* river primitives: the slot in probe->segs of their
@@ -226,10 +226,9 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
         if (l > 0)
         {
             const double nx = -dy / l * q->r, ny = dx / l * q->r;
-            p[np++] = (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0,
-                             in->segs[i], (uint32_t)i};
-            p[np++] = (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0,
-                             in->segs[i], (uint32_t)i};
+            const uint32_t it = in->segs[i], sl = (uint32_t)i;
+            p[np++] = (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, it, sl};
+            p[np++] = (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, it, sl};
         }
         /* end circles, each once: the start circle of a segment that
          * continues the previous one (same vertex, same radius) is that
@@ -344,9 +343,9 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
                         if (!(hit[h].x >= 1 && hit[h].x <= S - 1 &&
                               hit[h].y >= 1 && hit[h].y <= S - 1))
                             continue; /* strictly inside the block */
-                        const hit_pt c = {{round_pos(hit[h].x),
-                                           round_pos(hit[h].y)},
-                                          joint(in, p, q)};
+                        const hit_pt c = {
+                            {round_pos(hit[h].x), round_pos(hit[h].y)},
+                            joint(in, p, q)};
                         if (!wm_push((void **)&cand, &ncand, &candcap, &c,
                                      sizeof c))
                             goto nomem;

@@ -38,9 +38,10 @@
  * seeds reach it: a point of each input smaller than two pixels, the tip
  * of each river cap narrower than 1.5 pixels, the corners of the union
  * (two input boundaries crossing, corners.c) off their cell's segment, and
- * those of a cell holding two or more (crowded_cells). What stays unseen: three crossings on an edge whose
- * samples differ that is not loose, and a feature narrower than the
- * lattice's rounding (block.c drops rings thinner than 1 unit, 2A/P).
+ * those of a cell holding two or more (crowded_cells). What stays unseen:
+ * three crossings on an edge whose samples differ that is not loose, and a
+ * feature narrower than the lattice's rounding (block.c drops rings
+ * thinner than 1 unit, 2A/P).
  *
  * Seams: an edge's crossings depend on the inputs only, with every
  * coordinate difference formed in integers, so both blocks sharing an edge
