@@ -26,6 +26,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#define NO_ITEM UINT32_MAX
+
 typedef struct
 {
     double x0, y0, x1, y1; /* segment, or circle centre (x0,y0) radius x1 */
@@ -36,29 +38,43 @@ typedef struct
     uint32_t seg;  /* river primitives: the slot in probe->segs of their
                       segment (a shared circle: the earlier one's, whose
                       second end it is); lake edges: NO_ITEM */
+    uint32_t poly; /* lake edges: their polygon; rivers: NO_ITEM */
 } prim;
 
-/* A crossing found: where, and whether it joins one segment's primitives
- * or two segments sharing an end (joint). */
+static prim river_prim(double x0, double y0, double x1, double y1, int circle,
+                       uint32_t item, uint32_t slot)
+{
+    return (prim){x0, y0, x1, y1, circle, item, slot, NO_ITEM};
+}
+
+/* A crossing found: where, and whether it is joint (see joint()). */
 typedef struct
 {
     wm_pt p;
     int joint;
 } hit_pt;
 
-#define NO_ITEM UINT32_MAX
-
 static int cmp_hit(const void *a, const void *b)
 {
     return wm_pt_cmp(((const hit_pt *)a)->p, ((const hit_pt *)b)->p);
 }
 
-/* The lattice points a river primitive ends at: its segment's two ends
- * for an offset line, its centre for a circle. */
+/* The lattice points primitive p ends at: a lake edge's or its river
+ * segment's two ends for a line, its centre for a circle. */
 static int prim_ends(const wm_probe *in, const prim *p, int64_t e[2][2])
 {
-    const wm_river_seg *g = &in->s->segs[in->segs[p->seg]];
-    const int64_t a[2] = {g->ax, g->ay}, b[2] = {g->bx, g->by};
+    const wm_scene *s = in->s;
+    int64_t a[2], b[2];
+    if (p->seg != NO_ITEM)
+    {
+        const wm_river_seg *g = &s->segs[in->segs[p->seg]];
+        a[0] = g->ax, a[1] = g->ay, b[0] = g->bx, b[1] = g->by;
+    }
+    else
+    {
+        const wm_lake_edge *g = &s->edges[p->item - s->nsegs];
+        a[0] = g->ax, a[1] = g->ay, b[0] = g->bx, b[1] = g->by;
+    }
     int n = 0;
     if (p->circle != 2)
         memcpy(e[n++], a, sizeof a);
@@ -67,15 +83,17 @@ static int prim_ends(const wm_probe *in, const prim *p, int64_t e[2][2])
     return n;
 }
 
-/* Whether river primitives p and q come from one segment or from
+/* Whether primitives p and q come from one river segment, from two river
  * capsules sharing an end (the inside of a bend, lines meeting end to
- * end): a property of the coordinates, not of the order of the segments,
- * so a job reading its features in another order finds the same. */
+ * end), or from two edges of one lake polygon sharing an end (its vertex):
+ * a property of the coordinates, not of the order of the inputs, so a job
+ * reading its features in another order finds the same. */
 static int joint(const wm_probe *in, const prim *p, const prim *q)
 {
-    if (p->seg == NO_ITEM || q->seg == NO_ITEM)
+    if ((p->seg == NO_ITEM) != (q->seg == NO_ITEM) ||
+        (p->seg == NO_ITEM && p->poly != q->poly))
         return 0;
-    if (p->seg == q->seg)
+    if (p->seg != NO_ITEM && p->seg == q->seg)
         return 1;
     int64_t ep[2][2], eq[2][2];
     const int np = prim_ends(in, p, ep), nq = prim_ends(in, q, eq);
@@ -221,14 +239,16 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
         const double bx2 = (double)(q->bx - in->X0),
                      by2 = (double)(q->by - in->Y0);
         const double dx = bx2 - ax, dy = by2 - ay, l = sqrt(dx * dx + dy * dy);
+        const uint32_t it = in->segs[i], sl = (uint32_t)i;
         prim p[4];
         int np = 0;
         if (l > 0)
         {
             const double nx = -dy / l * q->r, ny = dx / l * q->r;
-            const uint32_t it = in->segs[i], sl = (uint32_t)i;
-            p[np++] = (prim){ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, it, sl};
-            p[np++] = (prim){ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, it, sl};
+            p[np++] =
+                river_prim(ax + nx, ay + ny, bx2 + nx, by2 + ny, 0, it, sl);
+            p[np++] =
+                river_prim(ax - nx, ay - ny, bx2 - nx, by2 - ny, 0, it, sl);
         }
         /* end circles, each once: the start circle of a segment that
          * continues the previous one (same vertex, same radius) is that
@@ -238,9 +258,9 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
         if (prev && prev->bx == q->ax && prev->by == q->ay && prev->r == q->r)
             pr[npr - 1].item = NO_ITEM;
         else
-            p[np++] = (prim){ax, ay, q->r, 0, 1, in->segs[i], (uint32_t)i};
+            p[np++] = river_prim(ax, ay, q->r, 0, 1, it, sl);
         if (l > 0)
-            p[np++] = (prim){bx2, by2, q->r, 0, 2, in->segs[i], (uint32_t)i};
+            p[np++] = river_prim(bx2, by2, q->r, 0, 2, it, sl);
         for (int k = 0; k < np; k++)
             if (!wm_push((void **)&pr, &npr, &prcap, &p[k], sizeof *p))
                 goto nomem;
@@ -257,7 +277,8 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
                       (double)(q->by - in->Y0),
                       0,
                       (uint32_t)(s->nsegs + e),
-                      NO_ITEM};
+                      NO_ITEM,
+                      pidx};
             double b[4];
             prim_box(&p, b);
             if (b[2] < lo || b[0] > hi || b[3] < lo || b[1] > hi)

@@ -549,19 +549,20 @@ static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
     return 1;
 }
 
-/* Seeds the corners of the union that join two capsules sharing no end
- * (probe->corner_joint is 0) in the cells holding two or more of them,
- * and makes those cells ambiguous. A boundary component inside one cell
- * meets no edge of the sample grid; unless it is an input smaller than two
- * pixels (seeded as such) it is bounded by arcs of several capsules and
- * lake edges, and all its corners lie in the cell. Group the capsules
- * that share ends: two capsules sharing an end are convex and meet, so a
- * group of them encloses nothing unless it closes a loop (the exception,
- * see architecture.md); a component's boundary that goes from one group
- * to another comes back, so it has two corners at least joining capsules
- * that share no end. This holds wherever the component lies in the cell,
- * even within a quarter pixel of the cell's segment (off_contour), and
- * does not depend on which corners of shared ends a job finds. */
+/* Seeds the corners of the union that join neither two capsules sharing
+ * an end nor two edges of one lake sharing a vertex (probe->corner_joint
+ * is 0) in the cells holding two or more of them, and makes those cells
+ * ambiguous. A boundary component inside one cell meets no edge of the
+ * sample grid; unless it is an input smaller than two pixels (seeded as
+ * such) it is bounded by arcs of several capsules and lake edges, and all
+ * its corners lie in the cell. Group the primitives that share ends: two
+ * capsules sharing an end are convex and meet, so a group of them encloses
+ * nothing unless it closes a loop, and a lake's edges close its own ring
+ * (the exceptions, see architecture.md); a boundary that goes from one
+ * group to another comes back, so it has two corners at least that are
+ * not joint. This holds wherever the component lies in the cell, even
+ * within a quarter pixel of the cell's segment (off_contour), and does not
+ * depend on which corners of shared ends a job finds. */
 static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
     seedkey *o = malloc((probe->ncorner + 1) * sizeof *o);
