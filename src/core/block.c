@@ -255,10 +255,13 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
             st = wm_fail(ctx, st, "out of memory extracting contours");
         if (st == WM_OK)
             st = wm_contour_extract_probed(f, &probe, &raw, ctx);
+        res->contour_vertices = raw.npts;
         if (st == WM_OK)
             st = wm_crease_recover_probed(&probe, f, &raw, ctx);
         wm_probe_free(&probe);
     }
+    if (opts->method == WM_METHOD_PAPER)
+        res->contour_vertices = raw.npts;
     wm_field_free(f);
     if (st == WM_OK)
         wm_rings_drop_small(&raw, s->n * WM_Q, opts->min_area);

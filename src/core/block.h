@@ -62,6 +62,9 @@ extern "C"
         double seconds[WM_STAGE_COUNT];
         size_t mixed_tiles;
         uint64_t samples, pairs;
+        uint64_t contour_vertices; /**< of the extracted rings, before
+                                      corners are put back: about the cells
+                                      the boundary crosses (statistics) */
     } wm_block_result;
 
     /** Runs block (bx, by); `res` is overwritten (free with

@@ -198,7 +198,7 @@ typedef struct
     double seconds[WM_STAGE_COUNT]; /* summed over blocks (thread time) */
     double wall;
     size_t blocks, polygons, vertices, triangles, mixed_tiles;
-    uint64_t samples, pairs;
+    uint64_t samples, pairs, contour_vertices;
 } WMRunStats;
 
 /** A wm_error_fn keeping the first message in *(char **)user (CPLStrdup'ed;

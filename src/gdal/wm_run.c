@@ -269,6 +269,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
         stats->mixed_tiles += res.mixed_tiles;
         stats->samples += res.samples;
         stats->pairs += res.pairs;
+        stats->contour_vertices += res.contour_vertices;
         if (!sink(user, &res))
         {
             err = CE_Failure;
@@ -468,6 +469,12 @@ void WMPrintStats(const WMScene *s, const WMRunStats *st)
            s->params.num_threads, (unsigned long)st->blocks,
            (unsigned long)st->mixed_tiles, (unsigned long long)st->samples,
            (unsigned long long)st->pairs);
+    printf("contour vertices %llu (about the cells the boundary crosses), "
+           "samples per contour vertex %.1f\n",
+           (unsigned long long)st->contour_vertices,
+           st->contour_vertices
+               ? (double)st->samples / (double)st->contour_vertices
+               : 0.0);
     const double denom =
         2.0 * (double)s->core.river_vertices + (double)s->core.lake_vertices;
     printf("polygons %lu, output vertices %lu, triangles %lu\n",
@@ -543,6 +550,7 @@ static void add_stats(WMRunStats *to, const WMRunStats *st)
     to->mixed_tiles += st->mixed_tiles;
     to->samples += st->samples;
     to->pairs += st->pairs;
+    to->contour_vertices += st->contour_vertices;
 }
 
 /* Keeps the blocks of batch (n pairs) that are the job's (SHARD). */
