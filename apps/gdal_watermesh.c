@@ -45,7 +45,8 @@ static void usage(int code)
         "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco "
         "<NAME>=<VALUE>]...\n"
         "       [-overwrite] [-progress|-q] [-stats]\n"
-        "       [-shard <i>/<N>] [-shard-env <var>] [-resume] [-list-blocks]\n"
+        "       [-shard <i>/<N>] [-shard-env <var>] [-shard-plan <file>]\n"
+        "       [-resume] [-list-blocks]\n"
         "       [<scene.watermesh>] <dst_datasource>\n"
         "\n"
         "Writes layers 'water' (dissolved polygons per block) and 'mesh'\n"
@@ -464,7 +465,7 @@ int main(int argc, char **argv)
     char *water_dst = NULL, *mesh_dst = NULL; /* what the run writes */
     int overwrite = FALSE, show_progress = FALSE, quiet = FALSE, stats = FALSE;
     int list = FALSE, resume = FALSE;
-    const char *shard = NULL, *shard_env = NULL;
+    const char *shard = NULL, *shard_env = NULL, *shard_plan = NULL;
     int rc = 1;
 
     for (int i = 1; i < argc; i++)
@@ -495,6 +496,8 @@ int main(int argc, char **argv)
             shard = argv[++i];
         else if (EQUAL(a, "-shard-env") && more)
             shard_env = argv[++i];
+        else if (EQUAL(a, "-shard-plan") && more)
+            shard_plan = argv[++i];
         else if (EQUAL(a, "-spat"))
         {
             if (i + 4 >= argc)
@@ -574,6 +577,13 @@ int main(int argc, char **argv)
         all = CSLSetNameValue(all, "STATS", "YES");
     if ((shard || shard_env) && !add_shard(&all, shard, shard_env))
         goto end;
+    if (shard_plan && !shard && !shard_env)
+    {
+        fprintf(stderr, "ERROR: -shard-plan needs -shard.\n");
+        goto end;
+    }
+    if (shard_plan)
+        all = CSLSetNameValue(all, "SHARD_PLAN", shard_plan);
     if (list)
     {
         rc = list_blocks(all) ? 0 : 1;

@@ -86,8 +86,8 @@ def test_gnu_parallel_resume_failed_and_merge(tmp_path, single):
     out = tmp_path / 'shards'
     out.mkdir()
     (tmp_path / 'stop_1').write_text('')
-    job = ('test -e %s/stop_{} && exit 3; %s -q %s -shard {}/4 %s/shard_{}.gpkg'
-           % (tmp_path, CLI_PATH, ' '.join(ARGS), out))
+    job = ('test -e %s/stop_{} && exit 3; %s -q %s -shard {}/4 -shard-plan %s/plan.txt '
+           '%s/shard_{}.gpkg' % (tmp_path, CLI_PATH, ' '.join(ARGS), tmp_path, out))
     log = str(tmp_path / 'jobs.log')
     run = lambda *extra: subprocess.run(['parallel', '-j', '2', '--joblog', log] + list(extra)
                                         + [job, ':::', '0', '1', '2', '3'],
@@ -181,3 +181,49 @@ def test_output_does_not_depend_on_feature_order(tmp_path):
         ds = None
     assert firsts[1] == firsts[0][::-1], 'the copy is not reversed'
     assert got[0]['water'] and got[0] == got[1]
+
+
+def test_shard_plan_spares_the_scan(tmp_path, single):
+    """-shard-plan: the first job (here -list-blocks) scans the inputs and
+    writes the grid's envelope and widest river to the plan; the jobs that
+    find it read only their features (no scan) and merge into the single
+    run's output."""
+    plan = str(tmp_path / 'plan.txt')
+    assert blocks('-shard', '0/1', '-shard-plan', plan) == blocks()
+    text = open(plan).read()
+    assert text.startswith('WATERMESH_SHARD_PLAN 1\nkey ') and '\nenvelope ' in text, text
+    shards = []
+    for i in range(3):
+        dst = str(tmp_path / ('shard_%d.gpkg' % i))
+        p = cli('-q', '--debug', 'on', *(ARGS + ['-shard', '%d/3' % i, '-shard-plan', plan,
+                                                dst]))
+        assert p.returncode == 0, p.stderr
+        assert 'SHARD_PLAN %s read: no scan' % plan in p.stderr, p.stderr
+        shards.append(dst)
+    merged = str(tmp_path / 'merged.gpkg')
+    merge(shards, merged)
+    assert features(merged) == single
+
+
+def test_shard_plan_bad(tmp_path):
+    """A plan made for other inputs or options, one that is not a plan, one
+    that cannot be written, and -shard-plan without -shard: errors naming
+    the plan, nothing written."""
+    plan = str(tmp_path / 'plan.txt')
+    assert cli('-list-blocks', *(ARGS + ['-shard', '0/1', '-shard-plan', plan])).returncode == 0
+    dst = str(tmp_path / 'out.gpkg')
+    p = cli('-q', *(ARGS + ['-width', '30', '-shard', '0/2', '-shard-plan', plan, dst]))
+    assert p.returncode != 0 and 'was made for other inputs' in p.stderr and plan in p.stderr, \
+        p.stderr
+    junk = str(tmp_path / 'junk.txt')
+    with open(junk, 'w') as f:
+        f.write('not a plan\n')
+    p = cli('-q', *(ARGS + ['-shard', '0/2', '-shard-plan', junk, dst]))
+    assert p.returncode != 0 and 'is not a plan' in p.stderr and junk in p.stderr, p.stderr
+    nowhere = str(tmp_path / 'no_such_dir' / 'plan.txt')
+    p = cli('-q', *(ARGS + ['-shard', '0/2', '-shard-plan', nowhere, dst]))
+    assert p.returncode != 0 and 'cannot be written' in p.stderr and nowhere in p.stderr, \
+        p.stderr
+    p = cli('-q', *(ARGS + ['-shard-plan', plan, dst]))
+    assert p.returncode != 0 and '-shard-plan needs -shard' in p.stderr, p.stderr
+    assert not os.path.exists(dst)

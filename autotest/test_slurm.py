@@ -84,8 +84,9 @@ def test_slurm_job_array(slurm, tmp_path, single):  # noqa: F811
     script.write_text('#!/bin/sh\n#SBATCH --array=0-3\n#SBATCH --cpus-per-task=1\n'
                       '#SBATCH --output=%s/job_%%a.log\n'
                       'exec %s -q -resume -num_threads 1 %s -shard 4 '
-                      '-shard-env SLURM_ARRAY_TASK_ID %s/shard_$SLURM_ARRAY_TASK_ID.gpkg\n'
-                      % (out, CLI_PATH, ' '.join(ARGS), out))
+                      '-shard-env SLURM_ARRAY_TASK_ID -shard-plan %s/plan.txt '
+                      '%s/shard_$SLURM_ARRAY_TASK_ID.gpkg\n'
+                      % (out, CLI_PATH, ' '.join(ARGS), tmp_path, out))
     p = subprocess.run(['sbatch', '--wait', str(script)], env=env, stdout=subprocess.PIPE,
                        stderr=subprocess.PIPE, universal_newlines=True, timeout=600)
     logs = {f: (out / f).read_text() for f in os.listdir(out) if f.endswith('.log')}

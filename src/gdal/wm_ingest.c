@@ -1017,7 +1017,7 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
     if (!s->hSRS)
         goto fail;
     s->unit = s->params.pixel / WM_Q;
-    int got = !s->params.nshards || WMShardPrepare(s, hRivers, hLakes);
+    int got = !s->params.nshards || WMShardPrepare(s, hRivers, hLakes, opts);
     got = got &&
           (!hRivers || read_rivers(&b, hRivers, &s->params, s->unit, s->hSRS,
                                    &s->core.river_vertices, s->width_source));

@@ -316,6 +316,9 @@ static int params_parse(CSLConstList opts, WMParams *p)
         p->shard = i;
         p->nshards = n;
     }
+    const char *plan = CSLFetchNameValue(opts, "SHARD_PLAN");
+    if (plan && *plan)
+        p->shard_plan = CPLStrdup(plan);
     p->stats = CPLTestBool(CSLFetchNameValueDef(opts, "STATS", "NO"));
     return TRUE;
 }
@@ -324,10 +327,11 @@ void WMParamsFree(WMParams *p)
 {
     CPLFree(p->width_field);
     CPLFree(p->target_srs);
+    CPLFree(p->shard_plan);
     CPLFree(p->class_field);
     CSLDestroy(p->class_names);
     CPLFree(p->class_widths);
-    p->width_field = p->target_srs = p->class_field = NULL;
+    p->width_field = p->target_srs = p->class_field = p->shard_plan = NULL;
     p->class_names = NULL;
     p->class_widths = NULL;
     p->nclasses = 0;

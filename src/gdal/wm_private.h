@@ -62,6 +62,7 @@ typedef struct
     double spat[4];         /* xmin, ymin, xmax, ymax in the working CRS */
     int64_t shard, nshards; /* SHARD=i/N: the i-th of N contiguous runs of
                                the grid's cells (nshards 0: all) */
+    char *shard_plan;       /* SHARD_PLAN: file of the scan's result, or NULL */
     int stats;
 } WMParams;
 
@@ -114,7 +115,8 @@ typedef struct
 /** SHARD: finds the job's cells of the grid around the layers' extents and
  *  sets on the layers the spatial filter of those cells grown by the halo
  *  (the widest river's half-width + 3 pixels); FALSE after a CPLError. */
-int WMShardPrepare(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes);
+int WMShardPrepare(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes,
+                   CSLConstList opts);
 
 /** Whether block (bx, by) is the job's (always without SHARD). */
 int WMShardHas(const WMScene *s, int64_t bx, int64_t by);

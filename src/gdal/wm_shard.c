@@ -17,6 +17,9 @@
 #include "wm_private.h"
 
 #include <cpl_conv.h>
+#include <cpl_multiproc.h>
+#include <cpl_string.h>
+#include <cpl_vsi.h>
 #include <math.h>
 #include <string.h>
 
@@ -81,17 +84,137 @@ static int filter_layer(OGRLayerH h, OGRSpatialReferenceH dst,
     return TRUE;
 }
 
-int WMShardPrepare(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes)
+/* ---- SHARD_PLAN: the scan's result, kept in a file ------------------ */
+
+#define PLAN_MAGIC "WATERMESH_SHARD_PLAN 1"
+
+/* What the scan's result depends on, as one line: the layers and the
+ * options that choose their features, widths and CRS. */
+static char *plan_key(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
+{
+    static const char *const keys[] = {
+        "RIVERS",      "RIVERS_WHERE",   "LAKES",      "LAKES_WHERE", "WIDTH",
+        "WIDTH_FIELD", "WIDTH_BY_CLASS", "TARGET_SRS", NULL};
+    char *k = CPLStrdup(CPLSPrintf("rivers_layer=%s lakes_layer=%s",
+                                   hRivers ? OGR_L_GetName(hRivers) : "",
+                                   hLakes ? OGR_L_GetName(hLakes) : ""));
+    for (int i = 0; keys[i]; i++)
+    {
+        const char *v = CSLFetchNameValue(opts, keys[i]);
+        char *n = CPLStrdup(CPLSPrintf("%s %s=%s", k, keys[i], v ? v : ""));
+        CPLFree(k);
+        k = n;
+    }
+    for (char *c = k; *c; c++) /* one line */
+        if (*c == '\n' || *c == '\r')
+            *c = ' ';
+    return k;
+}
+
+/* Reads plan file path into b / wmax / any: TRUE, -1 when the file does
+ * not exist, FALSE after a CPLError (unreadable, or made for another
+ * scene). */
+static int plan_read(const char *path, const char *key, double b[4],
+                     double *wmax, int *any)
+{
+    VSIStatBufL st;
+    if (VSIStatL(path, &st) != 0)
+        return -1;
+    char **lines = CSLLoad(path);
+    const int n = CSLCount(lines);
+    int ok =
+        n >= 4 && EQUAL(lines[0], PLAN_MAGIC) && STARTS_WITH(lines[1], "key ");
+    if (ok && strcmp(lines[1] + 4, key) != 0)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: SHARD_PLAN %s was made for other inputs or "
+                 "options (%s); this run has (%s). Remove it to scan "
+                 "again.",
+                 path, lines[1] + 4, key);
+        CSLDestroy(lines);
+        return FALSE;
+    }
+    *any = ok && !EQUAL(lines[2], "envelope none");
+    char tail = 0;
+    ok = ok && (!*any || sscanf(lines[2], "envelope %lf %lf %lf %lf%c", &b[0],
+                                &b[1], &b[2], &b[3], &tail) == 4);
+    ok = ok && sscanf(lines[3], "wmax %lf%c", wmax, &tail) == 1;
+    CSLDestroy(lines);
+    if (!ok)
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: SHARD_PLAN %s is not a plan written by "
+                 "gdal_watermesh.",
+                 path);
+    return ok;
+}
+
+/* Writes the plan atomically: a temporary file beside path, renamed (jobs
+ * starting together may each write the same plan). */
+static int plan_write(const char *path, const char *key, const double b[4],
+                      double wmax, int any)
+{
+    const char *tmp = CPLSPrintf("%s.tmp.%ld", path, (long)CPLGetPID());
+    char *t = CPLStrdup(tmp);
+    VSILFILE *fp = VSIFOpenL(t, "wb");
+    int ok = fp != NULL;
+    if (fp)
+    {
+        ok = VSIFPrintfL(fp, "%s\nkey %s\n", PLAN_MAGIC, key) > 0;
+        ok = ok && (any ? VSIFPrintfL(fp, "envelope %.17g %.17g %.17g %.17g\n",
+                                      b[0], b[1], b[2], b[3])
+                        : VSIFPrintfL(fp, "envelope none\n")) > 0;
+        ok = ok && VSIFPrintfL(fp, "wmax %.17g\n", wmax) > 0;
+        ok = VSIFCloseL(fp) == 0 && ok;
+    }
+    ok = ok && VSIRename(t, path) == 0;
+    if (!ok)
+    {
+        VSIUnlink(t);
+        CPLError(CE_Failure, CPLE_FileIO,
+                 "WATERMESH: SHARD_PLAN %s cannot be written.", path);
+    }
+    CPLFree(t);
+    return ok;
+}
+
+/* The envelope of the inputs (working CRS) and the widest river: from the
+ * plan file when there is one, else by the scan (written to the plan file
+ * when one is named). */
+static int scene_bounds(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes,
+                        CSLConstList opts, double b[4], double *wmax, int *any)
+{
+    const WMParams *p = &s->params;
+    char *key = p->shard_plan ? plan_key(hRivers, hLakes, opts) : NULL;
+    if (key)
+    {
+        const int st = plan_read(p->shard_plan, key, b, wmax, any);
+        if (st != -1)
+        {
+            CPLDebug("WATERMESH", "SHARD_PLAN %s read: no scan", p->shard_plan);
+            CPLFree(key);
+            return st;
+        }
+    }
+    const int rv =
+        hRivers ? layer_bounds(hRivers, p, TRUE, s->hSRS, b, wmax) : -1;
+    const int lk =
+        hLakes ? layer_bounds(hLakes, p, FALSE, s->hSRS, b, wmax) : -1;
+    int ok = rv && lk;
+    *any = rv == TRUE || lk == TRUE;
+    if (ok && key)
+        ok = plan_write(p->shard_plan, key, b, *wmax, *any);
+    CPLFree(key);
+    return ok;
+}
+
+int WMShardPrepare(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes,
+                   CSLConstList opts)
 {
     const WMParams *p = &s->params;
     double b[4] = {HUGE_VAL, HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, wmax = 0;
-    const int rv =
-        hRivers ? layer_bounds(hRivers, p, TRUE, s->hSRS, b, &wmax) : -1;
-    const int lk =
-        hLakes ? layer_bounds(hLakes, p, FALSE, s->hSRS, b, &wmax) : -1;
-    if (!rv || !lk)
+    int any = FALSE;
+    if (!scene_bounds(s, hRivers, hLakes, opts, b, &wmax, &any))
         return FALSE;
-    const int any = rv == TRUE || lk == TRUE;
     const double halo = wmax / 2 + 3 * p->pixel, B = p->block;
     WMShard *g = &s->shard;
     if (any)
