@@ -46,7 +46,7 @@ static void usage(int code)
         "<NAME>=<VALUE>]...\n"
         "       [-overwrite] [-progress|-q] [-stats]\n"
         "       [-shard <i>/<N>] [-shard-env <var>] [-shard-plan <file>]\n"
-        "       [-resume] [-list-blocks]\n"
+        "       [-blocks <bx>:<by>[,...]] [-resume] [-list-blocks]\n"
         "       [<scene.watermesh>] <dst_datasource>\n"
         "\n"
         "Writes layers 'water' (dissolved polygons per block) and 'mesh'\n"
@@ -466,6 +466,7 @@ int main(int argc, char **argv)
     int overwrite = FALSE, show_progress = FALSE, quiet = FALSE, stats = FALSE;
     int list = FALSE, resume = FALSE;
     const char *shard = NULL, *shard_env = NULL, *shard_plan = NULL;
+    const char *blocks = NULL;
     int rc = 1;
 
     for (int i = 1; i < argc; i++)
@@ -498,6 +499,8 @@ int main(int argc, char **argv)
             shard_env = argv[++i];
         else if (EQUAL(a, "-shard-plan") && more)
             shard_plan = argv[++i];
+        else if (EQUAL(a, "-blocks") && more)
+            blocks = argv[++i];
         else if (EQUAL(a, "-spat"))
         {
             if (i + 4 >= argc)
@@ -577,11 +580,13 @@ int main(int argc, char **argv)
         all = CSLSetNameValue(all, "STATS", "YES");
     if ((shard || shard_env) && !add_shard(&all, shard, shard_env))
         goto end;
-    if (shard_plan && !shard && !shard_env)
+    if (shard_plan && !shard && !shard_env && !blocks)
     {
-        fprintf(stderr, "ERROR: -shard-plan needs -shard.\n");
+        fprintf(stderr, "ERROR: -shard-plan needs -shard or -blocks.\n");
         goto end;
     }
+    if (blocks)
+        all = CSLSetNameValue(all, "BLOCKS", blocks);
     if (shard_plan)
         all = CSLSetNameValue(all, "SHARD_PLAN", shard_plan);
     if (list)

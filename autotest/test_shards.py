@@ -225,5 +225,31 @@ def test_shard_plan_bad(tmp_path):
     assert p.returncode != 0 and 'cannot be written' in p.stderr and nowhere in p.stderr, \
         p.stderr
     p = cli('-q', *(ARGS + ['-shard-plan', plan, dst]))
-    assert p.returncode != 0 and '-shard-plan needs -shard' in p.stderr, p.stderr
+    assert p.returncode != 0 and '-shard-plan needs -shard or -blocks' in p.stderr, p.stderr
     assert not os.path.exists(dst)
+
+
+def test_blocks_compute_the_named_blocks(tmp_path, single):
+    """-blocks X:Y[,...] (indices or ranges a..b): exactly the named blocks
+    that hold water, each as in the whole run; with -shard, the named
+    blocks of the job's share; a bad list is an error naming it."""
+    every = blocks()
+    pick = every[5:9] + every[-3:]
+    spec = ','.join('%d:%d' % b for b in pick)
+    assert blocks('-blocks', spec) == pick
+    x0, y0 = every[20]
+    rng = '%d..%d:%d..%d' % (x0 - 1, x0 + 1, y0, y0 + 1)
+    assert blocks('-blocks', rng) == [b for b in every
+                                      if x0 - 1 <= b[0] <= x0 + 1 and y0 <= b[1] <= y0 + 1]
+    assert blocks('-blocks', spec, '-shard', '1/2') == [b for b in pick
+                                                       if b in blocks('-shard', '1/2')]
+    dst = str(tmp_path / 'some.gpkg')
+    p = cli('-q', *(ARGS + ['-blocks', spec, dst]))
+    assert p.returncode == 0, p.stderr
+    got = features(dst)
+    for name in ('water', 'mesh'):  # FIDs are the output's own
+        want = [f[1:] for f in single[name] if tuple(f[1][:2]) in set(pick)]
+        assert [f[1:] for f in got[name]] == want and want, name
+    for bad in ('1:', '1..0:3', 'a:b', '1:2:3', '1:2,,'):
+        p = cli('-list-blocks', *(ARGS + ['-blocks', bad]))
+        assert p.returncode != 0 and 'BLOCKS=%s' % bad in p.stderr, (bad, p.stderr)

@@ -111,6 +111,50 @@ static int parse_classes(const char *spec, WMParams *p)
     return ok;
 }
 
+/* One index or an inclusive range a..b of BLOCKS; TRUE when valid. */
+static int parse_range(const char *t, int64_t *lo, int64_t *hi)
+{
+    char *end = NULL;
+    *lo = strtoll(t, &end, 10);
+    if (end == t)
+        return FALSE;
+    *hi = *lo;
+    if (end[0] == '.' && end[1] == '.')
+    {
+        const char *u = end + 2;
+        *hi = strtoll(u, &end, 10);
+        if (end == u)
+            return FALSE;
+    }
+    return *end == 0 && *lo <= *hi;
+}
+
+/* BLOCKS=X:Y[,X:Y...], X and Y a block index or a range a..b. */
+static int parse_blocks(const char *spec, WMParams *p)
+{
+    char **items = CSLTokenizeString2(spec, ",", CSLT_ALLOWEMPTYTOKENS);
+    const int n = CSLCount(items);
+    int ok = n > 0;
+    p->blockrects = CPLCalloc((size_t)(n > 0 ? n : 1), sizeof *p->blockrects);
+    for (int i = 0; ok && i < n; i++)
+    {
+        char **xy = CSLTokenizeString2(items[i], ":", CSLT_ALLOWEMPTYTOKENS);
+        int64_t *r = p->blockrects[i];
+        ok = CSLCount(xy) == 2 && parse_range(xy[0], &r[0], &r[2]) &&
+             parse_range(xy[1], &r[1], &r[3]);
+        CSLDestroy(xy);
+    }
+    CSLDestroy(items);
+    p->nblockrects = ok ? n : 0;
+    if (!ok)
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: BLOCKS=%s: expected bx:by items separated by "
+                 "commas, each index a number or a range a..b (e.g. "
+                 "10..12:40,15:41).",
+                 spec);
+    return ok;
+}
+
 int WMParamsParse(CSLConstList opts, WMParams *p)
 {
     memset(p, 0, sizeof *p);
@@ -316,6 +360,11 @@ static int params_parse(CSLConstList opts, WMParams *p)
         p->shard = i;
         p->nshards = n;
     }
+    const char *blk = CSLFetchNameValue(opts, "BLOCKS");
+    if (blk && !parse_blocks(blk, p))
+        return FALSE;
+    if (p->nblockrects && !p->nshards) /* the whole grid, then the rects */
+        p->nshards = 1;
     const char *plan = CSLFetchNameValue(opts, "SHARD_PLAN");
     if (plan && *plan)
         p->shard_plan = CPLStrdup(plan);
@@ -328,6 +377,9 @@ void WMParamsFree(WMParams *p)
     CPLFree(p->width_field);
     CPLFree(p->target_srs);
     CPLFree(p->shard_plan);
+    CPLFree(p->blockrects);
+    p->blockrects = NULL;
+    p->nblockrects = 0;
     CPLFree(p->class_field);
     CSLDestroy(p->class_names);
     CPLFree(p->class_widths);

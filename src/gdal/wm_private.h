@@ -63,6 +63,8 @@ typedef struct
     int64_t shard, nshards; /* SHARD=i/N: the i-th of N contiguous runs of
                                the grid's cells (nshards 0: all) */
     char *shard_plan;       /* SHARD_PLAN: file of the scan's result, or NULL */
+    int nblockrects;        /* BLOCKS: rectangles of block indices */
+    int64_t (*blockrects)[4]; /* bx0, by0, bx1, by1, inclusive (owned) */
     int stats;
 } WMParams;
 

@@ -13,6 +13,10 @@
  * the river capsules and lake edges within that distance of it, so the
  * job's blocks come out as in a whole run, and appending the jobs'
  * outputs in shard order gives the whole run's features.
+ *
+ * SHARD_PLAN keeps the pass's result in a file for the other jobs; BLOCKS
+ * narrows a job (SHARD=0/1 when not set) to rectangles of block indices,
+ * and its spatial filter to their bounding box grown by the halo.
  */
 #include "wm_private.h"
 
@@ -231,7 +235,7 @@ int WMShardPrepare(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes,
     g->last = (i + 1) * (total / n) + (i + 1) * (total % n) / n;
     g->on = TRUE;
     /* the job's cells: whole rows, or part of one */
-    double rect[4] = {0, 0, 0, 0};
+    double rect[4] = {0, 0, 0, 0}, bb[4] = {0, 0, 0, 0};
     if (g->last > g->first)
     {
         const int64_t nx = g->nx, f = (int64_t)g->first,
@@ -243,8 +247,26 @@ int WMShardPrepare(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes,
         rect[2] = (double)(g->gx0 + c1 + 1) * B + halo;
         rect[3] = (double)(g->gy0 + l / nx + 1) * B + halo;
     }
-    else /* an empty share: a rectangle beside the inputs, which holds none */
+    /* BLOCKS: within the bounding box of its rectangles too */
+    for (int k = 0; k < p->nblockrects; k++)
     {
+        const int64_t *r = p->blockrects[k];
+        const double q[4] = {(double)r[0] * B, (double)r[1] * B,
+                             (double)(r[2] + 1) * B, (double)(r[3] + 1) * B};
+        for (int j = 0; j < 4; j++)
+            bb[j] = k == 0  ? q[j]
+                    : j < 2 ? fmin(bb[j], q[j])
+                            : fmax(bb[j], q[j]);
+    }
+    if (p->nblockrects)
+    {
+        rect[0] = fmax(rect[0], bb[0] - halo);
+        rect[1] = fmax(rect[1], bb[1] - halo);
+        rect[2] = fmin(rect[2], bb[2] + halo);
+        rect[3] = fmin(rect[3], bb[3] + halo);
+    }
+    if (g->last <= g->first || rect[0] > rect[2] || rect[1] > rect[3])
+    { /* an empty share: a rectangle beside the inputs, which holds none */
         rect[0] = rect[2] = b[2] + 10 * (halo + B);
         rect[1] = rect[3] = b[3] + 10 * (halo + B);
     }
@@ -261,5 +283,14 @@ int WMShardHas(const WMScene *s, int64_t bx, int64_t by)
     if (c < 0 || r < 0 || c >= g->nx || r >= g->ny)
         return FALSE;
     const uint64_t k = (uint64_t)r * (uint64_t)g->nx + (uint64_t)c;
-    return k >= g->first && k < g->last;
+    if (k < g->first || k >= g->last)
+        return FALSE;
+    const WMParams *p = &s->params;
+    for (int i = 0; i < p->nblockrects; i++)
+    {
+        const int64_t *q = p->blockrects[i];
+        if (bx >= q[0] && bx <= q[2] && by >= q[1] && by <= q[3])
+            return TRUE;
+    }
+    return p->nblockrects == 0;
 }
