@@ -192,9 +192,10 @@ static int scene_bounds(WMScene *s, OGRLayerH hRivers, OGRLayerH hLakes,
     if (key)
     {
         const int st = plan_read(p->shard_plan, key, b, wmax, any);
+        if (st == TRUE)
+            CPLDebug("WATERMESH", "SHARD_PLAN %s read: no scan", p->shard_plan);
         if (st != -1)
         {
-            CPLDebug("WATERMESH", "SHARD_PLAN %s read: no scan", p->shard_plan);
             CPLFree(key);
             return st;
         }
