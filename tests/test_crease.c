@@ -45,6 +45,23 @@ static double nearest_edge(const wm_rings *r, double x, double y)
     return best;
 }
 
+typedef double (*dist_fn)(const wm_rings *, double, double);
+
+/* Samples block (0, 0) of s, extracts its rings into r and recovers their
+ * corners (checked: message what). *before: the distance in pixels from
+ * (cx, cy) to the extracted rings, by `dist`, before the recovery. */
+static void extract_recover(const wm_scene *s, double cx, double cy,
+                            dist_fn dist, wm_rings *r, double *before,
+                            const char *what)
+{
+    wm_field f;
+    wm_field_compute(s, 0, 0, s->n + 1, s->n + 1, NULL, &f, NULL);
+    TAP_EQ(wm_contour_extract(&f, r, NULL), WM_OK, "extract: %s", what);
+    *before = dist(r, cx, cy) / WM_Q;
+    TAP_EQ(wm_crease_recover(s, &f, 0, 0, r, NULL), WM_OK, "recover: %s", what);
+    wm_field_free(&f);
+}
+
 static void wedge(double angle_deg, double *cx, double *cy, wm_scene *s)
 {
     const double th = angle_deg * 3.14159265358979323846 / 180.0, r = 5.0;
@@ -67,13 +84,9 @@ int main(void)
         wm_scene s;
         double cx, cy;
         wedge(angles[k], &cx, &cy, &s);
-        wm_field f;
         wm_rings r = {0};
-        wm_field_compute(&s, 0, 0, 257, 257, NULL, &f, NULL);
-        TAP_EQ(wm_contour_extract(&f, &r, NULL), WM_OK, "extract %g deg",
-               angles[k]);
-        const double before = nearest_edge(&r, cx, cy) / WM_Q;
-        TAP_EQ(wm_crease_recover(&s, &f, 0, 0, &r, NULL), WM_OK, "recover");
+        double before;
+        extract_recover(&s, cx, cy, nearest_edge, &r, &before, "wedge");
         const double after = nearest_vertex(&r, cx, cy) / WM_Q;
         TAP_OK(after < 0.01,
                "%g deg wedge: tip %.3f px from the sampled rings, %.4f px "
@@ -83,7 +96,6 @@ int main(void)
         for (size_t i = 0; i < r.nrings; i++)
             TAP_OK(wm_ring_area2(r.pts + r.start[i], wm_rings_len(&r, i)) != 0,
                    "ring %zu keeps a non-zero area", i);
-        wm_field_free(&f);
         wm_rings_free(&r);
         wm_scene_free(&s);
     }
@@ -101,19 +113,15 @@ int main(void)
         su_finish(&s);
         /* the tip: river 1's lower bank (y = 100) meets river 2's upper */
         const double cx = (60 + 5.0 / sin(th)) * WM_Q, cy = 100.0 * WM_Q;
-        wm_field f;
         wm_rings r = {0};
-        wm_field_compute(&s, 0, 0, 1025, 1025, NULL, &f, NULL);
-        wm_contour_extract(&f, &r, NULL);
-        const double before = nearest_edge(&r, cx, cy) / WM_Q;
-        TAP_EQ(wm_crease_recover(&s, &f, 0, 0, &r, NULL), WM_OK,
-               "recover next to a wide river");
+        double before;
+        extract_recover(&s, cx, cy, nearest_edge, &r, &before,
+                        "next to a wide river");
         const double after = nearest_vertex(&r, cx, cy) / WM_Q;
         TAP_OK(after < 0.01 && before > 1,
                "wedge at a 1200 px river: tip %.3f px away, %.4f px after",
                before, after);
         TAP_OK(ring_meetings(&r) == 0, "rings still simple and disjoint");
-        wm_field_free(&f);
         wm_rings_free(&r);
         wm_scene_free(&s);
     }
@@ -173,20 +181,16 @@ int main(void)
         const double sa = (rx * -ub[1] + ub[0] * ry) / det;
         const double cx = (v[0] + sa * ua[0] - ra * ua[1]) * WM_Q;
         const double cy = (v[1] + sa * ua[1] + ra * ua[0]) * WM_Q;
-        wm_field f;
         wm_rings r = {0};
-        wm_field_compute(&s, 0, 0, 129, 129, NULL, &f, NULL);
-        wm_contour_extract(&f, &r, NULL);
-        const double before = nearest_vertex(&r, cx, cy) / WM_Q;
-        TAP_EQ(wm_crease_recover(&s, &f, 0, 0, &r, NULL), WM_OK,
-               "recover beside a narrow river");
+        double before;
+        extract_recover(&s, cx, cy, nearest_vertex, &r, &before,
+                        "beside a narrow river");
         const double after = nearest_vertex(&r, cx, cy) / WM_Q;
         TAP_OK(after < 0.01 && before > 0.5,
                "wedge beside a narrow river: tip %.3f px from a vertex, "
                "%.4f px after",
                before, after);
         TAP_OK(ring_meetings(&r) == 0, "rings still simple and disjoint");
-        wm_field_free(&f);
         wm_rings_free(&r);
         wm_scene_free(&s);
     }
@@ -215,20 +219,16 @@ int main(void)
         const double cx = 64.0 * WM_Q,
                      cy = (rv[1] + (64 - rv[0]) * m + rr * sqrt(1 + m * m)) *
                           WM_Q;
-        wm_field f;
         wm_rings r = {0};
-        wm_field_compute(&s, 0, 0, 129, 129, NULL, &f, NULL);
-        wm_contour_extract(&f, &r, NULL);
-        const double before = nearest_edge(&r, cx, cy) / WM_Q;
-        TAP_EQ(wm_crease_recover(&s, &f, 0, 0, &r, NULL), WM_OK,
-               "recover at a lake edge on a grid line");
+        double before;
+        extract_recover(&s, cx, cy, nearest_edge, &r, &before,
+                        "a lake edge on a grid line");
         const double after = nearest_edge(&r, cx, cy) / WM_Q;
         TAP_OK(after < 0.25,
                "bank leaving a lake edge on x = 64 px (+%g px): corner %.3f "
                "px from the sampled rings, %.4f px after",
                dy, before, after);
         TAP_OK(ring_meetings(&r) == 0, "rings still simple and disjoint");
-        wm_field_free(&f);
         wm_rings_free(&r);
         wm_scene_free(&s);
     }
