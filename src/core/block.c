@@ -245,8 +245,11 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
 
     const double t1 = wm_now();
     if (opts->method == WM_METHOD_PAPER)
+    {
         st =
             wm_paper_extract(f, (wm_heuristic)opts->heuristic, &raw, NULL, ctx);
+        res->contour_vertices = raw.npts;
+    }
     else
     {
         wm_probe probe;
@@ -260,8 +263,6 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
             st = wm_crease_recover_probed(&probe, f, &raw, ctx);
         wm_probe_free(&probe);
     }
-    if (opts->method == WM_METHOD_PAPER)
-        res->contour_vertices = raw.npts;
     wm_field_free(f);
     if (st == WM_OK)
         wm_rings_drop_small(&raw, s->n * WM_Q, opts->min_area);
