@@ -42,6 +42,8 @@ static void usage(int code)
         "       [-device AUTO|CPU|OPENCL] [-num_threads <n>|ALL_CPUS]\n"
         "       [-target_srs <srs>] [-spat <xmin> <ymin> <xmax> <ymax>]\n"
         "       [-mesh_geometry MULTIPOLYGON|TIN|TRIANGLES]\n"
+        "       [-elevation <raster>] [-elevation_band <n>]\n"
+        "       [-lake_level_percentile <p>] [-flow DEM|LINE_DIRECTION]\n"
         "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco "
         "<NAME>=<VALUE>]...\n"
         "       [-overwrite] [-progress|-q] [-stats]\n"
@@ -396,10 +398,10 @@ static int write_output(const WMScene *scene, GDALDriverH drv, const char *path,
     GDALDatasetH mout = out && mesh_path ? GDALCreate(drv, mesh_path, 0, 0, 0,
                                                       GDT_Unknown, dsco)
                                          : out;
-    OGRLayerH lw = out && mout
-                       ? make_layer(out, "water", wkbPolygon, scene->hSRS, lco,
-                                    WMLayerFields(scene, FALSE))
-                       : NULL;
+    OGRLayerH lw =
+        out && mout ? make_layer(out, "water", WMWaterType(scene), scene->hSRS,
+                                 lco, WMLayerFields(scene, FALSE))
+                    : NULL;
     OGRLayerH lm = lw ? make_layer(mout, "mesh", WMMeshType(scene), scene->hSRS,
                                    lco, WMLayerFields(scene, TRUE))
                       : NULL;

@@ -37,6 +37,8 @@ void wm_block_result_free(wm_block_result *res)
     free(res->poly_ring);
     free(res->poly_tri);
     free(res->tris);
+    free(res->z);
+    free(res->poly_body);
     memset(res, 0, sizeof *res);
 }
 

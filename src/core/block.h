@@ -56,9 +56,13 @@ extern "C"
         int64_t bx, by;
         wm_rings rings;
         size_t npolys;
-        size_t *poly_ring; /**< npolys + 1 (owned) */
-        size_t *poly_tri;  /**< npolys + 1 (owned) */
-        uint32_t *tris;    /**< (owned) */
+        size_t *poly_ring;  /**< npolys + 1 (owned) */
+        size_t *poly_tri;   /**< npolys + 1 (owned) */
+        uint32_t *tris;     /**< (owned) */
+        double *z;          /**< per point of rings: its height, or NULL
+                                 without ELEVATION (owned; drape.h) */
+        int32_t *poly_body; /**< per polygon: a lake body it holds, or -1;
+                                 NULL without ELEVATION (owned) */
         double seconds[WM_STAGE_COUNT];
         size_t mixed_tiles;
         uint64_t samples, pairs;

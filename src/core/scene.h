@@ -46,6 +46,20 @@ extern "C"
         int64_t ax, ay, bx, by; /**< global lattice */
     } wm_lake_edge;
 
+    /** Whether lake edge g crosses the ray from (X, Y) to +x: the field's
+     *  even-odd rule (half-open in y, so a vertex on the ray counts once),
+     *  exact in __int128. */
+    static inline int wm_edge_crosses_ray(const wm_lake_edge *g, int64_t X,
+                                          int64_t Y)
+    {
+        if ((g->ay <= Y) == (g->by <= Y))
+            return 0;
+        /* crossing x > X: (bx - ax)(Y - ay) > (X - ax)(by - ay), by > ay */
+        const wm_i128 l = (wm_i128)(g->bx - g->ax) * (Y - g->ay);
+        const wm_i128 r = (wm_i128)(X - g->ax) * (g->by - g->ay);
+        return g->by > g->ay ? l > r : l < r;
+    }
+
     /** An axis-aligned box in global lattice units, inclusive. */
     typedef struct
     {

@@ -346,7 +346,8 @@ WaterMeshLayer::WaterMeshLayer(WaterMeshDataset *poDS, bool bMesh)
 {
     SetDescription(m_poDefn->GetName());
     m_poDefn->Reference();
-    m_poDefn->SetGeomType(bMesh ? WMMeshType(poDS->m_poScene) : wkbPolygon);
+    m_poDefn->SetGeomType(bMesh ? WMMeshType(poDS->m_poScene)
+                                : WMWaterType(poDS->m_poScene));
     m_poDefn->GetGeomFieldDefn(0)->SetSpatialRef(
         OGRSpatialReference::FromHandle(poDS->m_poScene->hSRS));
     const WMField *fields = WMLayerFields(poDS->m_poScene, bMesh);
@@ -731,6 +732,20 @@ static const char OPEN_OPTIONS[] =
     "valid MultiPolygon), TIN (a TIN of Triangles) or TRIANGLES (one "
     "Polygon feature per triangle)'>"
     "    <Value>MULTIPOLYGON</Value><Value>TIN</Value><Value>TRIANGLES</Value>"
+    "  </Option>"
+    "  <Option name='ELEVATION' type='string' description='An elevation "
+    "raster (any GDAL raster and CRS): both layers get Z, lakes flat at a "
+    "shoreline percentile, rivers level bank to bank and never rising "
+    "downstream'/>"
+    "  <Option name='ELEVATION_BAND' type='int' default='1' min='1' "
+    "description='The band of ELEVATION'/>"
+    "  <Option name='LAKE_LEVEL_PERCENTILE' type='float' default='10' "
+    "min='0' max='100' description='A lake&apos;s level: this percentile "
+    "of the elevation along its shore'/>"
+    "  <Option name='FLOW' type='string-select' default='DEM' "
+    "description='River flow direction: DEM (from the higher end of each "
+    "line to the lower) or LINE_DIRECTION (as digitized)'>"
+    "    <Value>DEM</Value><Value>LINE_DIRECTION</Value>"
     "  </Option>"
     "</OpenOptionList>";
 

@@ -4,8 +4,10 @@
  *
  * A file is the 12-byte header, a JSON chunk and a BIN chunk (glTF 2.0,
  * "GLB file format specification"). One mesh, one primitive of
- * triangles: POSITION (float32 VEC3, with its min and max) and uint32
- * indices, in a buffer of the positions then the indices. Positions are
+ * triangles: POSITION (float32 VEC3, with its min and max), with
+ * ELEVATION NORMAL (float32 unit VEC3, area-weighted over the vertex's
+ * triangles) and y the vertex's height, and uint32 indices, in a buffer
+ * of the positions, the normals, then the indices. Positions are
  * metres relative to the block's origin (its lower-left corner in the
  * working CRS), so float32 keeps them to the lattice; glTF's axes are +X
  * east, +Y up, +Z south, which keeps the triangles counter-clockwise seen
@@ -21,6 +23,7 @@
 #include <cpl_vsi.h>
 
 #include <float.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -88,13 +91,57 @@ static int put_u32(VSILFILE *fp, uint32_t v)
     return VSIFWriteL(b, 1, 4, fp) == 4;
 }
 
-/* The BIN chunk's content: float32 positions (x, 0, -y), then uint32
- * indices; *min and *max of the positions. CPLFree the result. */
+/* Bytes of the BIN chunk: positions, normals (with heights), indices. */
+static size_t bin_length(const wm_block_result *r, size_t nv, size_t nt)
+{
+    return (r->z ? 24 : 12) * nv + 12 * nt;
+}
+
+/* Unit normals of the vertices of r (glTF axes), each the sum of its
+ * triangles' area-weighted normals; straight up where that vanishes. */
+static void normals(const wm_block_result *r, const float *pos, size_t nt,
+                    size_t nv, float *nrm)
+{
+    memset(nrm, 0, 12 * nv);
+    for (size_t t = 0; t < nt; t++)
+    {
+        const float *a = pos + 3 * (size_t)r->tris[3 * t];
+        const float *b = pos + 3 * (size_t)r->tris[3 * t + 1];
+        const float *c = pos + 3 * (size_t)r->tris[3 * t + 2];
+        const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+        const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1],
+                             e1[2] * e2[0] - e1[0] * e2[2],
+                             e1[0] * e2[1] - e1[1] * e2[0]};
+        for (int k = 0; k < 3; k++)
+            for (int j = 0; j < 3; j++)
+                nrm[3 * (size_t)r->tris[3 * t + (size_t)k] + (size_t)j] +=
+                    (float)n[j];
+    }
+    for (size_t i = 0; i < nv; i++)
+    {
+        float *n = nrm + 3 * i;
+        const double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] +
+                                (double)n[2] * n[2]);
+        if (!(len > 0))
+        {
+            n[0] = n[2] = 0.0f;
+            n[1] = 1.0f;
+            continue;
+        }
+        for (int k = 0; k < 3; k++)
+            n[k] = (float)(n[k] / len);
+    }
+}
+
+/* The BIN chunk's content: float32 positions (x, z, -y), then with heights
+ * float32 unit normals, then uint32 indices; *min and *max of the
+ * positions. CPLFree the result. */
 static unsigned char *bin_chunk(const WMScene *s, const wm_block_result *r,
                                 size_t nv, size_t nt, float min[3],
                                 float max[3])
 {
-    unsigned char *bin = VSI_MALLOC_VERBOSE(12 * nv + 12 * nt);
+    unsigned char *bin = VSI_MALLOC_VERBOSE(bin_length(r, nv, nt));
     if (!bin)
         return NULL;
     float *pos = (float *)bin;
@@ -105,7 +152,8 @@ static unsigned char *bin_chunk(const WMScene *s, const wm_block_result *r,
     }
     for (size_t i = 0; i < nv; i++)
     {
-        const float v[3] = {(float)(r->rings.pts[i].x * s->unit), 0.0f,
+        const float v[3] = {(float)(r->rings.pts[i].x * s->unit),
+                            r->z ? (float)r->z[i] : 0.0f,
                             -(float)(r->rings.pts[i].y * s->unit)};
         for (int k = 0; k < 3; k++)
         {
@@ -114,7 +162,9 @@ static unsigned char *bin_chunk(const WMScene *s, const wm_block_result *r,
             max[k] = v[k] > max[k] ? v[k] : max[k];
         }
     }
-    uint32_t *idx = (uint32_t *)(bin + 12 * nv);
+    if (r->z)
+        normals(r, pos, nt, nv, pos + 3 * nv);
+    uint32_t *idx = (uint32_t *)(bin + bin_length(r, nv, 0));
     for (size_t i = 0; i < 3 * nt; i++)
         idx[i] = r->tris[i];
     return bin;
@@ -142,25 +192,39 @@ static char *json_chunk(const glb_sink *g, const wm_block_result *r, size_t nv,
                         size_t nt, const float min[3], const float max[3],
                         double x0, double y0)
 {
-    return format(
+    const size_t pv = 12 * nv, nb = r->z ? 12 * nv : 0, ib = 12 * nt;
+    char *normal =
+        r->z ? format("{\"bufferView\":1,\"componentType\":5126,\"count\":"
+                      "%zu,\"type\":\"VEC3\"},",
+                      nv)
+             : CPLStrdup("");
+    char *nview = r->z ? format("{\"buffer\":0,\"byteOffset\":%zu,"
+                                "\"byteLength\":%zu,\"target\":34962},",
+                                pv, nb)
+                       : CPLStrdup("");
+    char *out = format(
         "{\"asset\":{\"version\":\"2.0\",\"generator\":\"watermesh %s\"},"
         "\"scene\":0,\"scenes\":[{\"nodes\":[0],\"extras\":{"
         "\"origin\":[%.17g,%.17g,0],\"block\":[%lld,%lld],\"crs\":%s,"
         "\"axes\":\"x east, y up, z south; metres from origin\"}}],"
         "\"nodes\":[{\"mesh\":0,\"name\":\"block %lld %lld\"}],"
-        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0},"
-        "\"indices\":1,\"mode\":4}]}],"
+        "\"meshes\":[{\"primitives\":[{\"attributes\":{\"POSITION\":0%s},"
+        "\"indices\":%d,\"mode\":4}]}],"
         "\"accessors\":[{\"bufferView\":0,\"componentType\":5126,"
         "\"count\":%zu,\"type\":\"VEC3\",\"min\":[%.9g,%.9g,%.9g],"
-        "\"max\":[%.9g,%.9g,%.9g]},{\"bufferView\":1,\"componentType\":"
+        "\"max\":[%.9g,%.9g,%.9g]},%s{\"bufferView\":%d,\"componentType\":"
         "5125,\"count\":%zu,\"type\":\"SCALAR\"}],"
         "\"bufferViews\":[{\"buffer\":0,\"byteOffset\":0,\"byteLength\":%zu,"
-        "\"target\":34962},{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":"
+        "\"target\":34962},%s{\"buffer\":0,\"byteOffset\":%zu,\"byteLength\":"
         "%zu,\"target\":34963}],\"buffers\":[{\"byteLength\":%zu}]}",
         WMVersion(), x0, y0, (long long)r->bx, (long long)r->by, g->crs,
-        (long long)r->bx, (long long)r->by, nv, (double)min[0], (double)min[1],
-        (double)min[2], (double)max[0], (double)max[1], (double)max[2], 3 * nt,
-        12 * nv, 12 * nv, 12 * nt, 12 * nv + 12 * nt);
+        (long long)r->bx, (long long)r->by, r->z ? ",\"NORMAL\":1" : "",
+        r->z ? 2 : 1, nv, (double)min[0], (double)min[1], (double)min[2],
+        (double)max[0], (double)max[1], (double)max[2], normal, r->z ? 2 : 1,
+        3 * nt, pv, nview, pv + nb, ib, pv + nb + ib);
+    CPLFree(normal);
+    CPLFree(nview);
+    return out;
 }
 
 /* Writes the GLB of r to path; FALSE after a CPLError. */
@@ -174,7 +238,7 @@ static int write_glb(const glb_sink *g, const wm_block_result *r,
         return FALSE;
     char *json = json_chunk(g, r, nv, nt, min, max, x0, y0);
     const size_t jl = strlen(json), jp = (jl + 3) / 4 * 4,
-                 bl = 12 * nv + 12 * nt, bp = (bl + 3) / 4 * 4;
+                 bl = bin_length(r, nv, nt), bp = (bl + 3) / 4 * 4;
     int ok = jp + bp + 28 <= UINT32_MAX;
     VSILFILE *fp = ok ? VSIFOpenL(path, "wb") : NULL;
     ok = fp && put_u32(fp, 0x46546C67u) && put_u32(fp, 2) &&

@@ -276,6 +276,8 @@ typedef struct
     size_t npolys, poly_cap;
     int64_t *px, *py; /* quantized points of the current line or ring */
     size_t npts, pts_cap;
+    size_t *line_end; /* per river line part: the end of its segments */
+    size_t nlines, lines_cap;
 } builder;
 
 static int reserve(void **p, size_t *cap, size_t need, size_t elem)
@@ -858,6 +860,14 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
                 s->by = b->py[i + 1];
                 s->r = w / 2.0 / unit;
             }
+            if (b->npts > 1 && !reserve((void **)&b->line_end, &b->lines_cap,
+                                        b->nlines + 1, sizeof *b->line_end))
+            {
+                ok = FALSE;
+                break;
+            }
+            if (b->npts > 1)
+                b->line_end[b->nlines++] = b->nsegs;
         }
         if (ok && b->nsegs == before)
             zero++;
@@ -1040,6 +1050,11 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
     b.segs = NULL;
     b.edges = NULL;
     b.poly_start = NULL;
+    s->line_start = CPLMalloc((b.nlines + 1) * sizeof *s->line_start);
+    s->line_start[0] = 0;
+    if (b.nlines)
+        memcpy(s->line_start + 1, b.line_end, b.nlines * sizeof(size_t));
+    s->nlines = b.nlines;
     s->core.n = s->params.n;
     s->core.band = 2;
     {
@@ -1056,12 +1071,14 @@ WMScene *WMSceneBuild(OGRLayerH hRivers, OGRLayerH hLakes, CSLConstList opts)
             goto fail;
         }
     }
-    if (!WMDeviceSelect(s))
+    if (!WMDrapePrepare(s) || !WMDeviceSelect(s))
         goto fail;
     VSIFree(b.px);
     VSIFree(b.py);
+    VSIFree(b.line_end);
     return s;
 fail:
+    VSIFree(b.line_end);
     VSIFree(b.segs);
     VSIFree(b.edges);
     VSIFree(b.poly_start);
@@ -1076,6 +1093,8 @@ void WMSceneFree(WMScene *s)
     if (!s)
         return;
     wm_scene_free(&s->core);
+    CPLFree(s->line_start);
+    WMDrapeFree(s->drape);
     CPLFree(s->device);
     if (s->hSRS)
         OSRRelease(s->hSRS);

@@ -37,6 +37,10 @@ const char *const WM_OPTION_NAMES[] = {"RIVERS",
                                        "TARGET_SRS",
                                        "MIN_FEATURE_AREA",
                                        "MESH_GEOMETRY",
+                                       "ELEVATION",
+                                       "ELEVATION_BAND",
+                                       "LAKE_LEVEL_PERCENTILE",
+                                       "FLOW",
                                        NULL};
 
 /* Parses a strictly numeric option value; CPLError on failure. */
@@ -153,6 +157,52 @@ static int parse_blocks(const char *spec, WMParams *p)
                  "10..12:40,15:41).",
                  spec);
     return ok;
+}
+
+/* ELEVATION, ELEVATION_BAND, LAKE_LEVEL_PERCENTILE and FLOW. */
+static int parse_elevation(CSLConstList opts, WMParams *p)
+{
+    const char *e = CSLFetchNameValue(opts, "ELEVATION");
+    if (e && *e)
+        p->elevation = CPLStrdup(e);
+    double band, pct;
+    if (!number(opts, "ELEVATION_BAND", 1, &band) ||
+        !number(opts, "LAKE_LEVEL_PERCENTILE", 10, &pct))
+        return FALSE;
+    if (band < 1 || band > INT32_MAX || band != floor(band))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: ELEVATION_BAND=%s: expected a band number from "
+                 "1.",
+                 CSLFetchNameValue(opts, "ELEVATION_BAND"));
+        return FALSE;
+    }
+    if (pct < 0 || pct > 100)
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: LAKE_LEVEL_PERCENTILE=%g: expected 0 to 100.",
+                 pct);
+        return FALSE;
+    }
+    p->elevation_band = (int)band;
+    p->lake_percentile = pct;
+    const char *fl = CSLFetchNameValueDef(opts, "FLOW", "DEM");
+    if (!EQUAL(fl, "DEM") && !EQUAL(fl, "LINE_DIRECTION"))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: FLOW=%s: expected DEM or LINE_DIRECTION.", fl);
+        return FALSE;
+    }
+    p->flow_line = EQUAL(fl, "LINE_DIRECTION");
+    if (p->elevation && (p->nshards || p->nblockrects))
+    {
+        CPLError(CE_Failure, CPLE_NotSupported,
+                 "WATERMESH: ELEVATION with SHARD or BLOCKS is not supported: "
+                 "a river's levels come from its whole network, which a job "
+                 "reads only in part.");
+        return FALSE;
+    }
+    return TRUE;
 }
 
 int WMParamsParse(CSLConstList opts, WMParams *p)
@@ -368,12 +418,16 @@ static int params_parse(CSLConstList opts, WMParams *p)
     const char *plan = CSLFetchNameValue(opts, "SHARD_PLAN");
     if (plan && *plan)
         p->shard_plan = CPLStrdup(plan);
+    if (!parse_elevation(opts, p))
+        return FALSE;
     p->stats = CPLTestBool(CSLFetchNameValueDef(opts, "STATS", "NO"));
     return TRUE;
 }
 
 void WMParamsFree(WMParams *p)
 {
+    CPLFree(p->elevation);
+    p->elevation = NULL;
     CPLFree(p->width_field);
     CPLFree(p->target_srs);
     CPLFree(p->shard_plan);

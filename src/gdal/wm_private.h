@@ -9,6 +9,7 @@
 #include "watermesh.h"
 
 #include "../core/block.h"
+#include "../core/drape.h"
 #include "../core/scene.h"
 
 CPL_C_START
@@ -65,6 +66,10 @@ typedef struct
     char *shard_plan;       /* SHARD_PLAN: file of the scan's result, or NULL */
     int nblockrects;        /* BLOCKS: rectangles of block indices */
     int64_t (*blockrects)[4]; /* bx0, by0, bx1, by1, inclusive (owned) */
+    char *elevation;          /* ELEVATION: a raster, or NULL */
+    int elevation_band;       /* ELEVATION_BAND */
+    double lake_percentile;   /* LAKE_LEVEL_PERCENTILE, 0 .. 100 */
+    int flow_line;            /* FLOW=LINE_DIRECTION (else DEM) */
     int stats;
 } WMParams;
 
@@ -112,7 +117,30 @@ typedef struct
     size_t width_source[3];  /* river features whose width came from
                                 WIDTH_FIELD, WIDTH_BY_CLASS, WIDTH */
     WMShard shard;           /* SHARD's cells (shard.on FALSE: all) */
+    size_t *line_start;      /* nlines + 1 offsets into core.segs: each
+                                river line part's segments, in order */
+    size_t nlines;
+    struct WMDrape *drape; /* ELEVATION's levels, or NULL (owned) */
 } WMScene;
+
+/** ELEVATION's levels (wm_drape.c): per river segment end and per lake
+ *  water body, and what the core's wm_drape reads. */
+typedef struct WMDrape
+{
+    wm_drape core;
+    double *za, *zb;     /* per segment */
+    double *tk, *zk;     /* per segment: its knee at a lake's shore */
+    int32_t *poly_body;  /* per lake polygon */
+    double *body_level;  /* per body */
+    double *body_spread; /* per body: max - min of its shoreline samples */
+    size_t nbodies;
+} WMDrape;
+
+/** Reads ELEVATION and computes the levels of s's lakes and rivers into
+ *  s->drape (nothing without ELEVATION). FALSE after a CPLError naming the
+ *  raster and the problem. */
+int WMDrapePrepare(WMScene *s);
+void WMDrapeFree(WMDrape *d);
 
 /** SHARD: finds the job's cells of the grid around the layers' extents and
  *  sets on the layers the spatial filter of those cells grown by the halo
@@ -227,6 +255,9 @@ OGRGeometryH WMTriangleGeometry(const WMScene *s, const wm_block_result *r,
 /** The mesh layer's geometry type: wkbMultiPolygon, wkbTIN, or wkbPolygon
  *  under MESH_GEOMETRY=TRIANGLES. */
 OGRwkbGeometryType WMMeshType(const WMScene *s);
+/** The water layer's geometry type: wkbPolygon, wkbPolygon25D with
+ *  ELEVATION (the mesh types likewise take Z). */
+OGRwkbGeometryType WMWaterType(const WMScene *s);
 
 /** An attribute field of an output layer. */
 typedef struct

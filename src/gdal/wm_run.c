@@ -129,6 +129,14 @@ static void *worker(void *arg)
             st = wm_block_finish(&r->s->core, bx, by, &f, &r->opts, &res, &ctx);
             res.seconds[WM_STAGE_FIELD] = fsec;
         }
+        if (st == WM_OK && r->s->drape)
+        {
+            const double t0 = wm_now();
+            st = wm_drape_block(&r->s->core, &r->s->drape->core, &res);
+            if (st != WM_OK)
+                wm_fail(&ctx, st, "out of memory draping the block");
+            res.seconds[WM_STAGE_TRIANGULATE] += wm_now() - t0;
+        }
         pthread_mutex_lock(&r->mu);
         r->slot[k] = res;
         r->msg[k] = msg;
@@ -319,6 +327,19 @@ static void world(const WMScene *s, const wm_block_result *r, wm_pt p,
     *y = (double)(r->by * side + p.y) * s->unit;
 }
 
+/* Point k of the block's rings into point i of g, with its height when
+ * the result has heights. */
+static void set_point(OGRGeometryH g, int i, const WMScene *s,
+                      const wm_block_result *r, size_t k)
+{
+    double x, y;
+    world(s, r, r->rings.pts[k], &x, &y);
+    if (r->z)
+        OGR_G_SetPoint(g, i, x, y, r->z[k]);
+    else
+        OGR_G_SetPoint_2D(g, i, x, y);
+}
+
 static OGRGeometryH ring_geom(const WMScene *s, const wm_block_result *r,
                               size_t ri)
 {
@@ -326,18 +347,14 @@ static OGRGeometryH ring_geom(const WMScene *s, const wm_block_result *r,
     const size_t a = r->rings.start[ri], b = r->rings.start[ri + 1];
     OGR_G_SetPointCount(g, (int)(b - a + 1));
     for (size_t k = a; k <= b; k++)
-    {
-        double x, y;
-        world(s, r, r->rings.pts[k == b ? a : k], &x, &y);
-        OGR_G_SetPoint_2D(g, (int)(k - a), x, y);
-    }
+        set_point(g, (int)(k - a), s, r, k == b ? a : k);
     return g;
 }
 
 OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
                                size_t p)
 {
-    OGRGeometryH g = OGR_G_CreateGeometry(wkbPolygon);
+    OGRGeometryH g = OGR_G_CreateGeometry(r->z ? wkbPolygon25D : wkbPolygon);
     for (size_t ri = r->poly_ring[p]; ri < r->poly_ring[p + 1]; ri++)
         OGR_G_AddGeometryDirectly(g, ring_geom(s, r, ri));
     return g;
@@ -347,7 +364,13 @@ OGRwkbGeometryType WMMeshType(const WMScene *s)
 {
     static const OGRwkbGeometryType types[] = {wkbMultiPolygon, wkbTIN,
                                                wkbPolygon};
-    return types[s->params.mesh_form];
+    const OGRwkbGeometryType t = types[s->params.mesh_form];
+    return s->params.elevation ? OGR_GT_SetZ(t) : t;
+}
+
+OGRwkbGeometryType WMWaterType(const WMScene *s)
+{
+    return s->params.elevation ? wkbPolygon25D : wkbPolygon;
 }
 
 /* Triangle t as a geometry of type `type` (wkbPolygon or wkbTriangle):
@@ -355,15 +378,11 @@ OGRwkbGeometryType WMMeshType(const WMScene *s)
 static OGRGeometryH triangle(const WMScene *s, const wm_block_result *r,
                              size_t t, OGRwkbGeometryType type)
 {
-    OGRGeometryH tri = OGR_G_CreateGeometry(type);
+    OGRGeometryH tri = OGR_G_CreateGeometry(r->z ? OGR_GT_SetZ(type) : type);
     OGRGeometryH ring = OGR_G_CreateGeometry(wkbLinearRing);
     OGR_G_SetPointCount(ring, 4); /* one allocation */
     for (int k = 0; k <= 3; k++)
-    {
-        double x, y;
-        world(s, r, r->rings.pts[r->tris[3 * t + (size_t)(k % 3)]], &x, &y);
-        OGR_G_SetPoint_2D(ring, k, x, y);
-    }
+        set_point(ring, k, s, r, r->tris[3 * t + (size_t)(k % 3)]);
     OGR_G_AddGeometryDirectly(tri, ring);
     return tri;
 }
@@ -374,7 +393,8 @@ OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
                             size_t p)
 {
     const int tin = s->params.mesh_form == WM_MESH_TIN;
-    OGRGeometryH g = OGR_G_CreateGeometry(tin ? wkbTIN : wkbMultiPolygon);
+    const OGRwkbGeometryType type = tin ? wkbTIN : wkbMultiPolygon;
+    OGRGeometryH g = OGR_G_CreateGeometry(r->z ? OGR_GT_SetZ(type) : type);
     for (size_t t = r->poly_tri[p]; t < r->poly_tri[p + 1]; t++)
         OGR_G_AddGeometryDirectly(
             g, triangle(s, r, t, tin ? wkbTriangle : wkbPolygon));
@@ -394,6 +414,11 @@ const WMField *WMLayerFields(const WMScene *s, int mesh)
                                     {"area", OFTReal},
                                     {"polygon", OFTInteger},
                                     {NULL, OFTInteger}};
+    static const WMField wlevel[] = {
+        {"block_x", OFTInteger}, {"block_y", OFTInteger},
+        {"area", OFTReal},       {"polygon", OFTInteger},
+        {"level", OFTReal},      {"level_spread", OFTReal},
+        {NULL, OFTInteger}};
     static const WMField polys[] = {{"block_x", OFTInteger},
                                     {"block_y", OFTInteger},
                                     {"triangles", OFTInteger},
@@ -404,7 +429,7 @@ const WMField *WMLayerFields(const WMScene *s, int mesh)
                                    {"polygon", OFTInteger},
                                    {NULL, OFTInteger}};
     if (!mesh)
-        return water;
+        return s->params.elevation ? wlevel : water;
     return s->params.mesh_form == WM_MESH_TRIANGLES ? tris : polys;
 }
 
@@ -428,6 +453,13 @@ OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
         const int ia = OGR_F_GetFieldIndex(f, "area");
         if (ia >= 0)
             OGR_F_SetFieldDouble(f, ia, WMPolygonArea(s, r, p));
+        const int il = OGR_F_GetFieldIndex(f, "level");
+        const int is = OGR_F_GetFieldIndex(f, "level_spread");
+        if (r->poly_body && r->poly_body[p] >= 0 && il >= 0 && is >= 0)
+        {
+            OGR_F_SetFieldDouble(f, il, s->drape->body_level[r->poly_body[p]]);
+            OGR_F_SetFieldDouble(f, is, s->drape->body_spread[r->poly_body[p]]);
+        }
         g = WMPolygonGeometry(s, r, p);
     }
     else if (t != SIZE_MAX)

@@ -1,0 +1,352 @@
+/*
+ * drape.c - heights of a block's mesh vertices from the levels of the
+ * inputs (ELEVATION; the rule is in drape.h).
+ *
+ * Method. The block's items (wm_scene_items) go into two indexes over a
+ * grid of CELL-wide cells of the block square: `near` holds each river
+ * segment in the cells its capsule grown by WM_DRAPE_NEAR meets, row by row
+ * (the segment clipped to the row's band), and each lake edge likewise;
+ * `rows` holds every edge of the block's lake polygons by the cell rows its
+ * half-open y range meets, for the even-odd ray cast to +x (edges beyond
+ * the block count: a polygon's parity needs them all). A point's height is
+ * then one ray cast over its row and one nearest-item search over its cell.
+ *
+ * Robustness: the ray cast is exact (integer differences, __int128
+ * products); distances are double on exact integer differences, and ties
+ * are broken by the item's global index, so the result does not depend on
+ * the block or on the order of the index.
+ *
+ * Cost: O(items x cells they meet + lake edges x rows they span) to build,
+ * O(items in the point's cell and row) per point.
+ */
+#include "drape.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Cell side, lattice units (32 pixels). */
+#define CELL (32 * WM_Q)
+
+typedef struct
+{
+    const wm_scene *s;
+    const wm_drape *d;
+    int64_t X0, Y0; /* block origin, global lattice */
+    int64_t S;      /* block side, lattice units */
+    int32_t side;   /* cells per side */
+    uint32_t *ids;  /* the block's items: segments, then polygons */
+    size_t nsegs, npolys;
+    uint32_t *ledge; /* edges of the block's polygons (global indices) */
+    uint32_t *lslot; /* per ledge: its polygon's slot in ids + nsegs */
+    size_t nledge;
+    wm_cells near, rows; /* near: k < nsegs a segment, else ledge k - nsegs */
+    uint8_t *par;        /* per polygon slot: ray-cast parity (scratch) */
+} index_t;
+
+static int32_t cell_of(const index_t *ix, double v)
+{
+    const double c = floor(v / CELL);
+    return c < 0 ? 0 : (c >= ix->side ? ix->side - 1 : (int32_t)c);
+}
+
+/* The x range [*lo, *hi] of segment a -> b (local doubles) within the band
+ * y0 <= y <= y1; 0 when it has none there. */
+static int band_span(double ax, double ay, double bx, double by, double y0,
+                     double y1, double *lo, double *hi)
+{
+    double t0 = 0, t1 = 1;
+    const double dy = by - ay;
+    if (dy == 0)
+    {
+        if (ay < y0 || ay > y1)
+            return 0;
+    }
+    else
+    {
+        double ta = (y0 - ay) / dy, tb = (y1 - ay) / dy;
+        if (ta > tb)
+        {
+            const double t = ta;
+            ta = tb;
+            tb = t;
+        }
+        t0 = ta > 0 ? ta : 0;
+        t1 = tb < 1 ? tb : 1;
+        if (t0 > t1)
+            return 0;
+    }
+    const double xa = ax + t0 * (bx - ax), xb = ax + t1 * (bx - ax);
+    *lo = xa < xb ? xa : xb;
+    *hi = xa < xb ? xb : xa;
+    return 1;
+}
+
+/* Registers item k (segment or edge a -> b, global) in the cells its
+ * distance-g neighbourhood meets. */
+static int add_near(index_t *ix, uint32_t k, int64_t ax, int64_t ay, int64_t bx,
+                    int64_t by, double g)
+{
+    const double lax = (double)(ax - ix->X0), lay = (double)(ay - ix->Y0);
+    const double lbx = (double)(bx - ix->X0), lby = (double)(by - ix->Y0);
+    const double ylo = (lay < lby ? lay : lby) - g;
+    const double yhi = (lay < lby ? lby : lay) + g;
+    if (yhi < 0 || ylo > (double)ix->S)
+        return 1;
+    const int32_t r0 = cell_of(ix, ylo), r1 = cell_of(ix, yhi);
+    for (int32_t r = r0; r <= r1; r++)
+    {
+        double lo, hi;
+        if (!band_span(lax, lay, lbx, lby, (double)r * CELL - g,
+                       (double)(r + 1) * CELL + g, &lo, &hi))
+            continue;
+        if (hi + g < 0 || lo - g > (double)ix->S)
+            continue;
+        const int32_t c1 = cell_of(ix, hi + g);
+        for (int32_t c = cell_of(ix, lo - g); c <= c1; c++)
+            if (!wm_cells_add(&ix->near, c, r, k))
+                return 0;
+    }
+    return 1;
+}
+
+static void index_free(index_t *ix)
+{
+    free(ix->ids);
+    free(ix->ledge);
+    free(ix->lslot);
+    free(ix->par);
+    wm_cells_free(&ix->near);
+    wm_cells_free(&ix->rows);
+}
+
+static wm_status index_build(index_t *ix, const wm_scene *s, const wm_drape *d,
+                             int64_t bx, int64_t by)
+{
+    memset(ix, 0, sizeof *ix);
+    ix->s = s;
+    ix->d = d;
+    ix->S = (int64_t)s->n * WM_Q;
+    ix->X0 = bx * ix->S;
+    ix->Y0 = by * ix->S;
+    ix->side = (int32_t)(ix->S / CELL + 1);
+    const wm_box blk = {bx, by, bx, by};
+    if (wm_scene_items(s, blk, &ix->ids, &ix->nsegs, &ix->npolys) != WM_OK)
+        return WM_ERR_NOMEM;
+    for (size_t i = 0; i < ix->npolys; i++)
+    {
+        const uint32_t p = ix->ids[ix->nsegs + i];
+        ix->nledge += s->poly_start[p + 1] - s->poly_start[p];
+    }
+    if (ix->nsegs + ix->nledge > UINT32_MAX)
+        return WM_ERR_NOMEM;
+    ix->ledge = malloc((ix->nledge + 1) * sizeof *ix->ledge);
+    ix->lslot = malloc((ix->nledge + 1) * sizeof *ix->lslot);
+    ix->par = calloc(ix->npolys + 1, 1);
+    if (!ix->ledge || !ix->lslot || !ix->par)
+        return WM_ERR_NOMEM;
+    wm_cells_reset(&ix->near, ix->side);
+    wm_cells_reset(&ix->rows, ix->side);
+    for (size_t i = 0; i < ix->nsegs; i++)
+    {
+        const wm_river_seg *g = &s->segs[ix->ids[i]];
+        if (!add_near(ix, (uint32_t)i, g->ax, g->ay, g->bx, g->by,
+                      g->r + WM_DRAPE_NEAR))
+            return WM_ERR_NOMEM;
+    }
+    size_t k = 0;
+    for (size_t i = 0; i < ix->npolys; i++)
+    {
+        const uint32_t p = ix->ids[ix->nsegs + i];
+        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++, k++)
+        {
+            const wm_lake_edge *g = &s->edges[e];
+            ix->ledge[k] = (uint32_t)e;
+            ix->lslot[k] = (uint32_t)i;
+            if (!add_near(ix, (uint32_t)(ix->nsegs + k), g->ax, g->ay, g->bx,
+                          g->by, WM_DRAPE_NEAR))
+                return WM_ERR_NOMEM;
+            /* the rows of its half-open y range [min, max) */
+            const int64_t y0 = (g->ay < g->by ? g->ay : g->by) - ix->Y0;
+            const int64_t y1 = (g->ay < g->by ? g->by : g->ay) - ix->Y0;
+            if (y0 == y1 || y1 <= 0 || y0 > ix->S)
+                continue;
+            const int32_t r1 = cell_of(ix, (double)(y1 - 1));
+            for (int32_t r = cell_of(ix, (double)y0); r <= r1; r++)
+                if (!wm_cells_add(&ix->rows, 0, r, (uint32_t)k))
+                    return WM_ERR_NOMEM;
+        }
+    }
+    if (wm_cells_index(&ix->near) != WM_OK ||
+        wm_cells_index(&ix->rows) != WM_OK)
+        return WM_ERR_NOMEM;
+    return WM_OK;
+}
+
+/* The lowest body of the polygons containing global point (X, Y), even-odd
+ * with the field's half-open rule; -1 when none does. */
+static int32_t lake_body(index_t *ix, int64_t X, int64_t Y)
+{
+    if (!ix->npolys)
+        return -1;
+    size_t b, e;
+    const int32_t r = cell_of(ix, (double)(Y - ix->Y0));
+    wm_cells_row(&ix->rows, r, 0, 0, &b, &e);
+    memset(ix->par, 0, ix->npolys);
+    for (size_t i = b; i < e; i++)
+    {
+        const uint32_t k = ix->rows.item[i];
+        if (wm_edge_crosses_ray(&ix->s->edges[ix->ledge[k]], X, Y))
+            ix->par[ix->lslot[k]] ^= 1;
+    }
+    int32_t body = -1;
+    for (size_t i = 0; i < ix->npolys; i++)
+        if (ix->par[i])
+        {
+            const int32_t bi = ix->d->poly_body[ix->ids[ix->nsegs + i]];
+            body = body < 0 || bi < body ? bi : body;
+        }
+    return body;
+}
+
+/* Squared distance from (px, py) to segment [(0, 0), (abx, aby)] and the
+ * parameter of the projection, clamped to [0, 1]. */
+static double seg_d2(double px, double py, double abx, double aby, double *t)
+{
+    const double len2 = abx * abx + aby * aby;
+    double u = len2 > 0 ? (px * abx + py * aby) / len2 : 0;
+    u = u < 0 ? 0 : (u > 1 ? 1 : u);
+    *t = u;
+    const double dx = px - u * abx, dy = py - u * aby;
+    return dx * dx + dy * dy;
+}
+
+/* The nearest item of the block to global (X, Y) among k in [b, e) of
+ * `near` (all items when items is NULL); its height into *z and, for a
+ * lake, its body into *body. Returns 0 when there is none. */
+static int nearest(const index_t *ix, int64_t X, int64_t Y,
+                   const uint32_t *items, size_t n, double *z, int32_t *body)
+{
+    const wm_scene *s = ix->s;
+    double best = INFINITY, bt = 0;
+    int found = 0, blake = 0;
+    uint32_t bglob = 0;
+    for (size_t i = 0; i < n; i++)
+    {
+        const uint32_t k = items ? items[i] : (uint32_t)i;
+        const int lake = k >= ix->nsegs;
+        const uint32_t glob = lake ? ix->ledge[k - ix->nsegs] : ix->ids[k];
+        int64_t ax, ay, bx, by;
+        double r = 0;
+        if (lake)
+        {
+            const wm_lake_edge *g = &s->edges[glob];
+            ax = g->ax, ay = g->ay, bx = g->bx, by = g->by;
+        }
+        else
+        {
+            const wm_river_seg *g = &s->segs[glob];
+            ax = g->ax, ay = g->ay, bx = g->bx, by = g->by, r = g->r;
+        }
+        double t;
+        const double d =
+            sqrt(seg_d2((double)(X - ax), (double)(Y - ay), (double)(bx - ax),
+                        (double)(by - ay), &t)) -
+            r;
+        const int better =
+            !found || d < best ||
+            (d == best && (lake > blake || (lake == blake && glob < bglob)));
+        if (!better)
+            continue;
+        found = 1;
+        best = d;
+        bt = t;
+        blake = lake;
+        bglob = glob;
+    }
+    if (!found)
+        return 0;
+    if (blake)
+    {
+        const wm_scene *sc = ix->s;
+        size_t lo = 0, hi = sc->npolys; /* the polygon holding edge bglob */
+        while (hi - lo > 1)
+        {
+            const size_t mid = lo + (hi - lo) / 2;
+            if (sc->poly_start[mid] <= bglob)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        *body = ix->d->poly_body[lo];
+        *z = ix->d->body_level[*body];
+    }
+    else
+    {
+        const wm_drape *d = ix->d;
+        const double tk = d->tk[bglob], zk = d->zk[bglob];
+        if (bt <= tk)
+            *z = tk > 0 ? d->za[bglob] + bt / tk * (zk - d->za[bglob]) : zk;
+        else
+            *z = zk + (bt - tk) / (1 - tk) * (d->zb[bglob] - zk);
+        *body = -1;
+    }
+    return 1;
+}
+
+/* Height and body of block-local point p. */
+static void height(index_t *ix, wm_pt p, double *z, int32_t *body)
+{
+    const int64_t X = ix->X0 + p.x, Y = ix->Y0 + p.y;
+    *body = lake_body(ix, X, Y);
+    if (*body >= 0)
+    {
+        *z = ix->d->body_level[*body];
+        return;
+    }
+    size_t b = 0, e = 0;
+    const int32_t c = cell_of(ix, (double)p.x), r = cell_of(ix, (double)p.y);
+    if (ix->near.nocc)
+        wm_cells_row(&ix->near, r, c, c, &b, &e);
+    if (nearest(ix, X, Y, ix->near.item + b, e - b, z, body))
+        return;
+    if (!nearest(ix, X, Y, NULL, ix->nsegs + ix->nledge, z, body))
+        *z = 0; /* no item at all: an empty block has no vertex */
+}
+
+wm_status wm_drape_block(const wm_scene *s, const wm_drape *d,
+                         wm_block_result *res)
+{
+    index_t ix;
+    memset(&ix, 0, sizeof ix);
+    double *z = calloc(res->rings.npts + 1, sizeof *z);
+    int32_t *pb = malloc((res->npolys + 1) * sizeof *pb);
+    wm_status st = WM_ERR_NOMEM;
+    if (!z || !pb || index_build(&ix, s, d, res->bx, res->by) != WM_OK)
+        goto done;
+    for (size_t p = 0; p < res->npolys; p++)
+    {
+        pb[p] = -1;
+        const size_t a = res->rings.start[res->poly_ring[p]];
+        const size_t b = res->rings.start[res->poly_ring[p + 1]];
+        for (size_t k = a; k < b; k++)
+        {
+            int32_t body;
+            height(&ix, res->rings.pts[k], &z[k], &body);
+            if (body >= 0 && (pb[p] < 0 || body < pb[p]))
+                pb[p] = body;
+        }
+    }
+    free(res->z);
+    free(res->poly_body);
+    res->z = z;
+    res->poly_body = pb;
+    z = NULL;
+    pb = NULL;
+    st = WM_OK;
+done:
+    index_free(&ix);
+    free(z);
+    free(pb);
+    return st;
+}
