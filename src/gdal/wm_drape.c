@@ -36,11 +36,25 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* The raster is read in TILE x TILE windows, NCACHE of them kept
+ * (direct-mapped by tile index): a point costs a few loads, not four
+ * RasterIO calls. */
+#define TILE 256
+#define NCACHE 64
+
+typedef struct
+{
+    int tx, ty; /* -1: empty */
+    int ok;     /* the read worked */
+    double *v;  /* TILE * TILE values (NAN: nodata or off the raster) */
+} dem_tile;
+
 typedef struct
 {
     const char *path;
     GDALDatasetH ds;
     GDALRasterBandH band;
+    dem_tile cache[NCACHE];
     double inv[6]; /* world (raster CRS) to pixel */
     int nx, ny, has_nodata;
     double nodata;
@@ -50,6 +64,8 @@ typedef struct
 
 static void dem_close(dem_t *d)
 {
+    for (int i = 0; i < NCACHE; i++)
+        CPLFree(d->cache[i].v);
     if (d->ct)
         OCTDestroyCoordinateTransformation(d->ct);
     if (d->ds)
@@ -61,6 +77,8 @@ static int dem_open(dem_t *d, const WMScene *s, double *step)
 {
     const WMParams *p = &s->params;
     memset(d, 0, sizeof *d);
+    for (int i = 0; i < NCACHE; i++)
+        d->cache[i].tx = -1;
     d->path = p->elevation;
     d->ds = GDALOpenEx(p->elevation, GDAL_OF_RASTER | GDAL_OF_VERBOSE_ERROR,
                        NULL, NULL, NULL);
@@ -122,6 +140,29 @@ static int valid(const dem_t *d, double v)
     return isfinite(v) && !(d->has_nodata && v == d->nodata);
 }
 
+/* Pixel (i, j) of the raster (inside it), NAN for nodata or a failed
+ * read. */
+static double pixel(dem_t *d, int i, int j)
+{
+    const int tx = i / TILE, ty = j / TILE;
+    dem_tile *t = &d->cache[(unsigned)(tx * 31 + ty) % NCACHE];
+    if (t->tx != tx || t->ty != ty)
+    {
+        if (!t->v)
+            t->v = CPLMalloc(sizeof(double) * TILE * TILE);
+        const int w = d->nx - tx * TILE < TILE ? d->nx - tx * TILE : TILE;
+        const int h = d->ny - ty * TILE < TILE ? d->ny - ty * TILE : TILE;
+        t->ok = GDALRasterIO(d->band, GF_Read, tx * TILE, ty * TILE, w, h, t->v,
+                             w, h, GDT_Float64, 0,
+                             TILE * (int)sizeof(double)) == CE_None;
+        t->tx = tx;
+        t->ty = ty;
+    }
+    const double v =
+        t->v[(size_t)(j - ty * TILE) * TILE + (size_t)(i - tx * TILE)];
+    return t->ok && valid(d, v) ? v : NAN;
+}
+
 /* The raster at world point (x, y) of the working CRS, bilinear over the
  * four nearest pixel centres that hold data; NAN where none does. */
 static double dem_at(dem_t *d, double x, double y)
@@ -142,10 +183,8 @@ static double dem_at(dem_t *d, double x, double y)
             const double w = (di ? fx : 1 - fx) * (dj ? fy : 1 - fy);
             if (i < 0 || j < 0 || i >= d->nx || j >= d->ny || w <= 0)
                 continue;
-            double val;
-            if (GDALRasterIO(d->band, GF_Read, i, j, 1, 1, &val, 1, 1,
-                             GDT_Float64, 0, 0) != CE_None ||
-                !valid(d, val))
+            const double val = pixel(d, i, j);
+            if (isnan(val))
                 continue;
             sum += w * val;
             wsum += w;
