@@ -42,6 +42,7 @@ static void usage(int code)
         "       [-device AUTO|CPU|OPENCL] [-num_threads <n>|ALL_CPUS]\n"
         "       [-target_srs <srs>] [-spat <xmin> <ymin> <xmax> <ymax>]\n"
         "       [-mesh_geometry MULTIPOLYGON|TIN|TRIANGLES]\n"
+        "       [-min_angle <deg>] [-max_edge <m>]\n"
         "       [-elevation <raster>] [-elevation_band <n>]\n"
         "       [-lake_level_percentile <p>] [-flow DEM|LINE_DIRECTION]\n"
         "       [-of <format>] [-lco <NAME>=<VALUE>]... [-dsco "

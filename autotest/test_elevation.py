@@ -350,15 +350,23 @@ def read_glb_z(path):
     return doc, pos, nrm, idx
 
 
-def test_glb_heights_and_normals(wm, scene, draped):
-    out = os.path.join(scene['dir'], 'glb')
-    p = wm.cli(base_args(scene, '-elevation', scene['dem']) + ['-overwrite', '-of', 'GLB', out])
+def glb(wm, scene, name, *extra):
+    """(index.json, files) of a -of GLB run, every file validated."""
+    out = os.path.join(scene['dir'], name)
+    p = wm.cli(base_args(scene, '-elevation', scene['dem'], *extra) +
+               ['-overwrite', '-of', 'GLB', out])
     assert p.returncode == 0, p.stderr
     with open(os.path.join(out, 'index.json')) as f:
         index = json.load(f)
     files = [os.path.join(out, b['file']) for b in index['blocks']]
     rc, reports = validate(files)
     assert rc == 0 and all(r['errors'] == 0 for r in reports), reports[:3]
+    return index, files
+
+
+def test_glb_heights_and_normals(wm, scene, draped):
+    index, files = glb(wm, scene, 'glb')
+    out = os.path.dirname(files[0])
     pts, feats = vertices(draped)
     heights = {}
     for x, y, z, fi in pts:
@@ -373,4 +381,25 @@ def test_glb_heights_and_normals(wm, scene, draped):
             z = heights[(round(x0 + p_[0], 2), round(y0 - p_[2], 2))]
             assert abs(p_[1] - z) < 1e-3
     ds = gdal.OpenEx(draped, gdal.OF_VECTOR)
+    assert ntri == sum(f['triangles'] for f in ds.GetLayerByName('mesh')) > 0
+
+
+def test_refined_draped_mesh(wm, scene, draped):
+    """MIN_ANGLE and MAX_EDGE add Steiner points inside the water: they are
+    draped by the same rule (lakes flat, rivers descending), and the glTF
+    files carry the refined triangles."""
+    p, out = run(wm, scene, 'refined.gpkg', '-elevation', scene['dem'],
+                 '-min_angle', '20', '-max_edge', '60')
+    mesh, _ = vertices(out, 'mesh')
+    plain, _ = vertices(draped, 'mesh')
+    assert len({(x, y) for x, y, z, fi in mesh}) > 3 * len({(x, y) for x, y, z, fi in plain})
+    for name in LAKES:
+        zs = {z for x, y, z, fi in mesh if owner(x, y) == name}
+        assert len(zs) == 1, (name, sorted(zs)[:5])
+    prof = river_profiles(mesh)
+    assert_descending(prof['A'], downstream_is_increasing_s=False)
+    assert_descending(prof['B'], downstream_is_increasing_s=True)
+    index, files = glb(wm, scene, 'glb_refined', '-min_angle', '20', '-max_edge', '60')
+    ntri = sum(len(read_glb_z(fn)[3]) // 3 for fn in files)
+    ds = gdal.OpenEx(out, gdal.OF_VECTOR)
     assert ntri == sum(f['triangles'] for f in ds.GetLayerByName('mesh')) > 0

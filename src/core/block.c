@@ -9,6 +9,7 @@
 #include "block.h"
 
 #include "cdt.h"
+#include "refine.h"
 #include "contour.h"
 #include "crease.h"
 #include "field.h"
@@ -37,6 +38,7 @@ void wm_block_result_free(wm_block_result *res)
     free(res->poly_ring);
     free(res->poly_tri);
     free(res->tris);
+    free(res->xpts);
     free(res->z);
     free(res->poly_body);
     memset(res, 0, sizeof *res);
@@ -157,10 +159,53 @@ cleanup:
     return st;
 }
 
-static wm_status triangulate(wm_block_result *res, const wm_ctx *ctx)
+/* Appends polygon p's triangles t (nt, local indices: its ring points,
+ * then its nx added points x) to res. */
+static wm_status add_triangles(wm_block_result *res, size_t *cap, size_t p,
+                               const uint32_t *t, size_t nt, size_t np,
+                               const wm_pt *x, size_t nx)
 {
-    wm_status st = WM_OK;
-    size_t cap = 0, n = 0;
+    const size_t n = res->poly_tri[p],
+                 base = res->rings.start[res->poly_ring[p]];
+    const size_t xbase = res->rings.npts + res->nxpts;
+    if (n + nt > *cap)
+    {
+        size_t nc = *cap ? *cap : 256;
+        while (nc < n + nt)
+            nc *= 2;
+        uint32_t *q = realloc(res->tris, 3 * nc * sizeof *q);
+        if (!q)
+            return WM_ERR_NOMEM;
+        res->tris = q;
+        *cap = nc;
+    }
+    if (nx)
+    {
+        wm_pt *q = realloc(res->xpts, (res->nxpts + nx) * sizeof *q);
+        if (!q)
+            return WM_ERR_NOMEM;
+        res->xpts = q;
+        memcpy(res->xpts + res->nxpts, x, nx * sizeof *x);
+        res->nxpts += nx;
+    }
+    for (size_t i = 0; i < 3 * nt; i++)
+        res->tris[3 * n + i] =
+            (uint32_t)(t[i] < np ? t[i] + base : t[i] - np + xbase);
+    res->poly_tri[p + 1] = n + nt;
+    return WM_OK;
+}
+
+/* The constrained Delaunay triangulation of every polygon, refined to
+ * MIN_ANGLE and MAX_EDGE when asked (refine.h). */
+static wm_status triangulate(wm_block_result *res, const wm_scene *s,
+                             const wm_block_opts *opts, const wm_ctx *ctx)
+{
+    const int refine = opts->min_angle > 0 || opts->max_edge > 0;
+    const int64_t S = (int64_t)s->n * WM_Q;
+    const wm_refine_opts ro = {opts->min_angle, opts->max_edge, (int32_t)S,
+                               res->bx * S, res->by * S};
+    wm_refine_stats rs = {0, 0, 0};
+    size_t cap = 0;
     res->poly_tri = calloc(res->npolys + 1, sizeof *res->poly_tri);
     if (!res->poly_tri)
         return wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
@@ -168,40 +213,33 @@ static wm_status triangulate(wm_block_result *res, const wm_ctx *ctx)
     {
         const size_t r0 = res->poly_ring[p], r1 = res->poly_ring[p + 1];
         const size_t base = res->rings.start[r0];
-        size_t *rs = malloc((r1 - r0 + 1) * sizeof *rs);
+        size_t *rs_ = malloc((r1 - r0 + 1) * sizeof *rs_);
         uint32_t *t = NULL;
-        size_t nt = 0;
-        if (!rs)
+        wm_pt *x = NULL;
+        size_t nt = 0, nx = 0;
+        if (!rs_)
             return wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
         for (size_t r = r0; r <= r1; r++)
-            rs[r - r0] = res->rings.start[r] - base;
-        st = wm_cdt_triangulate(res->rings.pts + base, rs, r1 - r0, &t, &nt,
-                                ctx);
-        free(rs);
+            rs_[r - r0] = res->rings.start[r] - base;
+        const size_t np = rs_[r1 - r0];
+        wm_status st =
+            refine ? wm_refine_triangulate(res->rings.pts + base, rs_, r1 - r0,
+                                           &ro, &t, &nt, &x, &nx, &rs, ctx)
+                   : wm_cdt_triangulate(res->rings.pts + base, rs_, r1 - r0, &t,
+                                        &nt, ctx);
+        free(rs_);
+        if (st == WM_OK &&
+            add_triangles(res, &cap, p, t, nt, np, x, nx) != WM_OK)
+            st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
+        free(t);
+        free(x);
         if (st != WM_OK)
             return st;
-        if (n + nt > cap)
-        {
-            size_t nc = cap ? cap : 256;
-            while (nc < n + nt)
-                nc *= 2;
-            uint32_t *q = realloc(res->tris, 3 * nc * sizeof *q);
-            if (!q)
-            {
-                free(t);
-                return wm_fail(ctx, WM_ERR_NOMEM,
-                               "out of memory triangulating");
-            }
-            res->tris = q;
-            cap = nc;
-        }
-        for (size_t i = 0; i < 3 * nt; i++)
-            res->tris[3 * n + i] = (uint32_t)(t[i] + base);
-        free(t);
-        n += nt;
-        res->poly_tri[p + 1] = n;
     }
-    return st;
+    res->steiner = rs.steiner;
+    res->small_input = rs.small_input;
+    res->left = rs.left;
+    return WM_OK;
 }
 
 wm_status wm_block_field(const wm_scene *s, int64_t bx, int64_t by,
@@ -298,7 +336,7 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     if (st != WM_OK)
         goto cleanup;
     if (opts->triangulate)
-        st = triangulate(res, ctx);
+        st = triangulate(res, s, opts, ctx);
     res->seconds[WM_STAGE_TRIANGULATE] = wm_now() - t4;
 cleanup:
     free(enc);

@@ -38,9 +38,11 @@ extern "C"
         int triangulate; /**< 0: polygons only */
         const wm_field_device *dev; /**< evaluates the field; NULL: C path */
         wm_method method;
-        int heuristic;   /**< a wm_heuristic (paper.h), METHOD=PAPER */
-        double merge;    /**< vertex merge distance, lattice units; 0 off */
-        double min_area; /**< MIN_FEATURE_AREA, square lattice units; 0 off */
+        int heuristic;    /**< a wm_heuristic (paper.h), METHOD=PAPER */
+        double merge;     /**< vertex merge distance, lattice units; 0 off */
+        double min_area;  /**< MIN_FEATURE_AREA, square lattice units; 0 off */
+        double min_angle; /**< MIN_ANGLE, degrees; 0 off (refine.h) */
+        double max_edge;  /**< MAX_EDGE, lattice units; 0 off */
     } wm_block_opts;
 
     /**
@@ -49,17 +51,22 @@ extern "C"
      * Polygon p is rings poly_ring[p] .. poly_ring[p+1]-1 of `rings`, the first
      * its outer ring (CCW), the others its holes (CW), in a deterministic
      * order. Its triangles are tris[3*poly_tri[p] .. 3*poly_tri[p+1]-1],
-     * indices into rings.pts, counter-clockwise.
+     * counter-clockwise, indices into rings.pts followed by xpts (the
+     * Steiner points of MIN_ANGLE and MAX_EDGE): wm_block_point.
      */
     typedef struct
     {
         int64_t bx, by;
         wm_rings rings;
         size_t npolys;
-        size_t *poly_ring;  /**< npolys + 1 (owned) */
-        size_t *poly_tri;   /**< npolys + 1 (owned) */
-        uint32_t *tris;     /**< (owned) */
-        double *z;          /**< per point of rings: its height, or NULL
+        size_t *poly_ring; /**< npolys + 1 (owned) */
+        size_t *poly_tri;  /**< npolys + 1 (owned) */
+        uint32_t *tris;    /**< (owned) */
+        wm_pt *xpts;       /**< the mesh's added points (owned; NULL: none) */
+        size_t nxpts;
+        size_t steiner, small_input, left; /**< refinement (refine.h) */
+        double *z;          /**< per point of rings, then of xpts: its
+                                 height, or NULL
                                  without ELEVATION (owned; drape.h) */
         int32_t *poly_body; /**< per polygon: a lake body it holds, or -1;
                                  NULL without ELEVATION (owned) */
@@ -91,6 +98,18 @@ extern "C"
                               wm_block_result *res, const wm_ctx *ctx);
 
     void wm_block_result_free(wm_block_result *res);
+
+    /** Point i of a result's mesh: rings.pts, then xpts. */
+    static inline wm_pt wm_block_point(const wm_block_result *r, size_t i)
+    {
+        return i < r->rings.npts ? r->rings.pts[i] : r->xpts[i - r->rings.npts];
+    }
+
+    /** Points a result's triangles index: rings.npts + nxpts. */
+    static inline size_t wm_block_npoints(const wm_block_result *r)
+    {
+        return r->rings.npts + r->nxpts;
+    }
 
     /** Monotonic clock in seconds. */
     double wm_now(void);

@@ -770,7 +770,7 @@ static void radix_sort(skey *a, skey *tmp, size_t n, size_t *cnt)
 
 /* Checks the rings: sizes, coordinates, orientation. */
 static wm_status check_input(const wm_pt *pts, const size_t *rs, size_t nrings,
-                             const wm_ctx *ctx)
+                             size_t nextra, const wm_ctx *ctx)
 {
     if (rs[0] != 0)
         return wm_fail(ctx, WM_ERR_INVALID, "cdt: ring_start[0] is not 0");
@@ -780,8 +780,8 @@ static wm_status check_input(const wm_pt *pts, const size_t *rs, size_t nrings,
             return wm_fail(ctx, WM_ERR_INVALID,
                            "cdt: ring %zu has fewer than 3 vertices", r);
     }
-    const size_t n = rs[nrings];
-    if (n > MAX_PTS)
+    const size_t n = rs[nrings] + nextra;
+    if (n > MAX_PTS || nextra > MAX_PTS)
         return wm_fail(ctx, WM_ERR_NOMEM, "cdt: too many vertices (%zu)", n);
     for (size_t i = 0; i < n; i++)
     {
@@ -801,72 +801,26 @@ static wm_status check_input(const wm_pt *pts, const size_t *rs, size_t nrings,
     return WM_OK;
 }
 
-wm_status wm_cdt_triangulate(const wm_pt *pts, const size_t *ring_start,
-                             size_t nrings, uint32_t **tris, size_t *ntris,
-                             const wm_ctx *ctx)
+/* Inserts every point (rings and extra) in a biased randomized insertion
+ * order (BRIO, Amenta, Choi, Rote 2003): each point draws a round, the last
+ * one with probability 1/2, the one before with 1/4, and so on; rounds go
+ * in order and each is sorted along the Morton curve, by one radix sort on
+ * (round << 50 | Morton key). The randomness keeps the expected number of
+ * flips per point constant whatever the input (a pure curve order is
+ * quadratic on, e.g., a square's dense border: each new point on one side
+ * flips a whole fan to the opposite side); the curve keeps the walks
+ * short. The generator is fixed: the output is deterministic. */
+static wm_status insert_points(mesh *m, const wm_pt *pts, size_t n)
 {
+    skey *keys = alloc_n(n, sizeof *keys), *ktmp = alloc_n(n, sizeof *ktmp);
+    size_t *cnt = alloc_n(RADIX_SIZE, sizeof *cnt);
     wm_status st = WM_OK;
-    mesh m;
-    skey *keys = NULL, *ktmp = NULL;
-    size_t *cnt = NULL;
-    uint8_t *state = NULL;
-    int32_t *queue = NULL;
-    uint32_t *out = NULL;
-
-    memset(&m, 0, sizeof m);
-    m.ctx = ctx;
-    if (tris)
-        *tris = NULL;
-    if (ntris)
-        *ntris = 0;
-    if (!pts || !ring_start || !tris || !ntris || nrings == 0)
-        return wm_fail(ctx, WM_ERR_INVALID, "cdt: missing argument");
-    st = check_input(pts, ring_start, nrings, ctx);
-    if (st != WM_OK)
-        return st;
-
-    const size_t n = ring_start[nrings];
-    const size_t nall = n + 3;
-    const size_t maxtri = 2 * nall - 5; /* hull of 3: 2V - 2 - 3 */
-    m.nv = (int32_t)n;
-    m.maxtri = (int32_t)maxtri;
-    m.rng = 2463534242u;
-    m.p = alloc_n(nall, sizeof *m.p);
-    m.v = alloc_n(3 * maxtri, sizeof *m.v);
-    m.tw = alloc_n(3 * maxtri, sizeof *m.tw);
-    m.con = alloc_n(3 * maxtri, sizeof *m.con);
-    m.ve = alloc_n(nall, sizeof *m.ve);
-    keys = alloc_n(n, sizeof *keys);
-    ktmp = alloc_n(n, sizeof *ktmp);
-    cnt = alloc_n(RADIX_SIZE, sizeof *cnt);
-    if (!m.p || !m.v || !m.tw || !m.con || !m.ve || !keys || !ktmp || !cnt)
+    if (!keys || !ktmp || !cnt)
     {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory (%zu vertices)", n);
+        st = wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory (%zu vertices)",
+                     n);
         goto cleanup;
     }
-
-    /* points, super triangle, first triangle */
-    memcpy(m.p, pts, n * sizeof *pts);
-    const int32_t s0 = (int32_t)n, s1 = s0 + 1, s2 = s0 + 2;
-    m.p[s0].x = -SUPER_M;
-    m.p[s0].y = -SUPER_M;
-    m.p[s1].x = SUPER_M * 3 + SUPER_M / 2;
-    m.p[s1].y = -SUPER_M;
-    m.p[s2].x = -SUPER_M;
-    m.p[s2].y = SUPER_M * 3 + SUPER_M / 2;
-    m.ntri = 1;
-    set_tri(&m, 0, s0, s1, s2);
-    m.tw[0] = m.tw[1] = m.tw[2] = -1;
-
-    /* Insertion order: a biased randomized insertion order (BRIO, Amenta,
-     * Choi, Rote 2003): each point draws a round, the last one with
-     * probability 1/2, the one before with 1/4, and so on; rounds go in
-     * order and each is sorted along the Morton curve, by one radix sort on
-     * (round << 50 | Morton key). The randomness keeps the expected number
-     * of flips per point constant whatever the input (a pure curve order
-     * is quadratic on, e.g., a square's dense border: each new point on
-     * one side flips a whole fan to the opposite side); the curve keeps the
-     * walks short. The generator is fixed: the output is deterministic. */
     uint32_t rounds = 0, seed = 0x9e3779b9u;
     while (rounds < 26 && (n >> (rounds + 6)) > 0)
         rounds++;
@@ -887,28 +841,183 @@ wm_status wm_cdt_triangulate(const wm_pt *pts, const size_t *ring_start,
                       spread_bits((uint32_t)pts[i].y) << 1;
     }
     radix_sort(keys, ktmp, n, cnt);
-    free(ktmp);
-    ktmp = NULL;
-    free(cnt);
-    cnt = NULL;
-
-    for (size_t i = 0; i < n; i++)
-    {
-        st = insert_point(&m, keys[i].idx);
-        if (st != WM_OK)
-            goto cleanup;
-    }
+    for (size_t i = 0; i < n && st == WM_OK; i++)
+        st = insert_point(m, keys[i].idx);
+cleanup:
     free(keys);
-    keys = NULL;
+    free(ktmp);
+    free(cnt);
+    return st;
+}
 
-    /* constraints, ring by ring */
+/* Labels the triangles by a flood fill from the super triangle, toggling
+ * at each constraint: state[t] 1 outside, 2 inside. */
+static wm_status flood_fill(const mesh *m, uint8_t *state, int32_t *queue)
+{
+    const size_t nt = (size_t)m->ntri;
+    size_t qh = 0, qt = 0;
+    const int32_t t0 = m->ve[m->nv] / 3; /* a triangle of the super vertex */
+    queue[qt++] = t0;
+    state[t0] = 1;
+    while (qh < qt)
+    {
+        const int32_t t = queue[qh++];
+        for (int32_t h = 3 * t; h < 3 * t + 3; h++)
+        {
+            const int32_t g = m->tw[h];
+            if (g < 0)
+                continue;
+            const uint8_t s = (uint8_t)(((state[t] - 1) ^ m->con[h]) + 1);
+            if (state[g / 3] == 0)
+            {
+                state[g / 3] = s;
+                queue[qt++] = g / 3;
+            }
+            else if (state[g / 3] != s)
+                return wm_fail(m->ctx, WM_ERR_INTERNAL,
+                               "cdt: inconsistent inside/outside labels");
+        }
+    }
+    if (qt != nt)
+        return wm_fail(m->ctx, WM_ERR_INTERNAL, "cdt: mesh not connected");
+    return WM_OK;
+}
+
+/* Counts the inside triangles into *inside and checks them: no super
+ * vertex, and Euler's count: a polygon with h holes and k vertices inside
+ * it has n + 2h - 2 + 2k triangles; anything else means holes outside the
+ * outer ring, nested holes, or extra points not strictly inside. */
+static wm_status check_inside(const mesh *m, const uint8_t *state, size_t nring,
+                              size_t nrings, size_t nextra, size_t *inside)
+{
+    *inside = 0;
+    for (size_t t = 0; t < (size_t)m->ntri; t++)
+    {
+        if (state[t] != 2)
+            continue;
+        (*inside)++;
+        for (size_t i = 0; i < 3; i++)
+            if (m->v[3 * t + i] >= m->nv)
+                return wm_fail(m->ctx, WM_ERR_INVALID,
+                               "cdt: rings are not a polygon with holes");
+    }
+    const size_t expect = nring + 2 * (nrings - 1) - 2 + 2 * nextra;
+    if (*inside != expect)
+        return wm_fail(m->ctx, WM_ERR_INVALID,
+                       "cdt: %zu triangles instead of %zu: holes not strictly "
+                       "inside the outer ring, nested, or extra points not "
+                       "strictly inside",
+                       *inside, expect);
+    return WM_OK;
+}
+
+/* Lawson pass over the interior edges. Anglada's construction keeps the
+ * triangulation constrained Delaunay, so this flips nothing (none in any
+ * test); it certifies the result. Flips inside stay inside: both triangles
+ * are. The budget only stops a runaway: far more than a repair of a nearly
+ * Delaunay mesh could need. */
+static wm_status certify(mesh *m, const uint8_t *state, size_t n)
+{
+    m->stack.n = 0;
+    for (size_t t = 0; t < (size_t)m->ntri; t++)
+    {
+        if (state[t] != 2)
+            continue;
+        for (int32_t h = 3 * (int32_t)t; h < 3 * (int32_t)t + 3; h++)
+            if (!m->con[h] && m->tw[h] > h && !ivec_push(&m->stack, h))
+                return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+    }
+    return lawson(m, 0, 32 * n + 1024);
+}
+
+static void mesh_free(mesh *m)
+{
+    free(m->p);
+    free(m->v);
+    free(m->tw);
+    free(m->con);
+    free(m->ve);
+    free(m->tstamp);
+    free(m->vstamp);
+    free(m->stack.a);
+    for (int s = 0; s < 2; s++)
+    {
+        free(m->side[s].v.a);
+        free(m->side[s].hc.a);
+        free(m->side[s].o.a);
+        free(m->side[s].fl.a);
+        free(m->side[s].anten.a);
+    }
+    free(m->cav.a);
+    free(m->tstk.a);
+    free(m->pend.a);
+}
+
+wm_status wm_cdt_triangulate(const wm_pt *pts, const size_t *ring_start,
+                             size_t nrings, uint32_t **tris, size_t *ntris,
+                             const wm_ctx *ctx)
+{
+    return wm_cdt_triangulate_ex(pts, ring_start, nrings, 0, tris, ntris, ctx);
+}
+
+wm_status wm_cdt_triangulate_ex(const wm_pt *pts, const size_t *ring_start,
+                                size_t nrings, size_t nextra, uint32_t **tris,
+                                size_t *ntris, const wm_ctx *ctx)
+{
+    wm_status st = WM_OK;
+    mesh m;
+    uint8_t *state = NULL;
+    int32_t *queue = NULL;
+    uint32_t *out = NULL;
+
+    memset(&m, 0, sizeof m);
+    m.ctx = ctx;
+    if (tris)
+        *tris = NULL;
+    if (ntris)
+        *ntris = 0;
+    if (!pts || !ring_start || !tris || !ntris || nrings == 0)
+        return wm_fail(ctx, WM_ERR_INVALID, "cdt: missing argument");
+    st = check_input(pts, ring_start, nrings, nextra, ctx);
+    if (st != WM_OK)
+        return st;
+
+    const size_t nring = ring_start[nrings], n = nring + nextra;
+    const size_t nall = n + 3;
+    const size_t maxtri = 2 * nall - 5; /* hull of 3: 2V - 2 - 3 */
+    m.nv = (int32_t)n;
+    m.maxtri = (int32_t)maxtri;
+    m.rng = 2463534242u;
+    m.p = alloc_n(nall, sizeof *m.p);
+    m.v = alloc_n(3 * maxtri, sizeof *m.v);
+    m.tw = alloc_n(3 * maxtri, sizeof *m.tw);
+    m.con = alloc_n(3 * maxtri, sizeof *m.con);
+    m.ve = alloc_n(nall, sizeof *m.ve);
     m.tstamp = calloc(maxtri, sizeof *m.tstamp);
     m.vstamp = calloc(nall, sizeof *m.vstamp);
-    if (!m.tstamp || !m.vstamp)
+    if (!m.p || !m.v || !m.tw || !m.con || !m.ve || !m.tstamp || !m.vstamp)
     {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory (%zu vertices)", n);
         goto cleanup;
     }
+
+    /* points, super triangle, first triangle */
+    memcpy(m.p, pts, n * sizeof *pts);
+    const int32_t s0 = (int32_t)n, s1 = s0 + 1, s2 = s0 + 2;
+    m.p[s0].x = -SUPER_M;
+    m.p[s0].y = -SUPER_M;
+    m.p[s1].x = SUPER_M * 3 + SUPER_M / 2;
+    m.p[s1].y = -SUPER_M;
+    m.p[s2].x = -SUPER_M;
+    m.p[s2].y = SUPER_M * 3 + SUPER_M / 2;
+    m.ntri = 1;
+    set_tri(&m, 0, s0, s1, s2);
+    m.tw[0] = m.tw[1] = m.tw[2] = -1;
+    st = insert_points(&m, pts, n);
+    if (st != WM_OK)
+        goto cleanup;
+
+    /* constraints, ring by ring */
     for (size_t r = 0; r < nrings; r++)
     {
         const size_t b0 = ring_start[r], len = ring_start[r + 1] - b0;
@@ -921,8 +1030,8 @@ wm_status wm_cdt_triangulate(const wm_pt *pts, const size_t *ring_start,
         }
     }
 
-    /* flood fill: 1 outside, 2 inside, 0 not reached */
     const size_t nt = (size_t)m.ntri;
+    size_t inside = 0;
     state = calloc(nt, 1);
     queue = alloc_n(nt, sizeof *queue);
     if (!state || !queue)
@@ -930,83 +1039,11 @@ wm_status wm_cdt_triangulate(const wm_pt *pts, const size_t *ring_start,
         st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
         goto cleanup;
     }
-    size_t qh = 0, qt = 0, inside = 0;
-    queue[qt++] = m.ve[s0] / 3;
-    state[m.ve[s0] / 3] = 1;
-    while (qh < qt)
-    {
-        const int32_t t = queue[qh++];
-        for (int32_t h = 3 * t; h < 3 * t + 3; h++)
-        {
-            const int32_t g = m.tw[h];
-            if (g < 0)
-                continue;
-            const uint8_t s = (uint8_t)(((state[t] - 1) ^ m.con[h]) + 1);
-            if (state[g / 3] == 0)
-            {
-                state[g / 3] = s;
-                queue[qt++] = g / 3;
-            }
-            else if (state[g / 3] != s)
-            {
-                st = wm_fail(ctx, WM_ERR_INTERNAL,
-                             "cdt: inconsistent inside/outside labels");
-                goto cleanup;
-            }
-        }
-    }
-    if (qt != nt)
-    {
-        st = wm_fail(ctx, WM_ERR_INTERNAL, "cdt: mesh not connected");
-        goto cleanup;
-    }
-    for (size_t t = 0; t < nt; t++)
-    {
-        if (state[t] != 2)
-            continue;
-        inside++;
-        for (size_t i = 0; i < 3; i++)
-        {
-            if (m.v[3 * t + i] >= m.nv)
-            {
-                st = wm_fail(ctx, WM_ERR_INVALID,
-                             "cdt: rings are not a polygon with holes");
-                goto cleanup;
-            }
-        }
-    }
-    /* Euler: a polygon with h holes and only boundary vertices has
-     * n + 2h - 2 triangles; anything else means holes outside the outer
-     * ring or nested holes */
-    const size_t expect = n + 2 * (nrings - 1) - 2;
-    if (inside != expect)
-    {
-        st = wm_fail(ctx, WM_ERR_INVALID,
-                     "cdt: %zu triangles instead of %zu: holes not strictly "
-                     "inside the outer ring, or nested",
-                     inside, expect);
-        goto cleanup;
-    }
-    /* Lawson pass over the interior edges. Anglada's construction keeps
-     * the triangulation constrained Delaunay, so this flips nothing (none
-     * in any test); it certifies the result. Flips inside stay inside:
-     * both triangles are. The budget only stops a runaway: far more than
-     * a repair of a nearly Delaunay mesh could need. */
-    m.stack.n = 0;
-    for (size_t t = 0; t < nt; t++)
-    {
-        if (state[t] != 2)
-            continue;
-        for (int32_t h = 3 * (int32_t)t; h < 3 * (int32_t)t + 3; h++)
-        {
-            if (!m.con[h] && m.tw[h] > h && !ivec_push(&m.stack, h))
-            {
-                st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
-                goto cleanup;
-            }
-        }
-    }
-    st = lawson(&m, 0, 32 * n + 1024);
+    st = flood_fill(&m, state, queue);
+    if (st == WM_OK)
+        st = check_inside(&m, state, nring, nrings, nextra, &inside);
+    if (st == WM_OK)
+        st = certify(&m, state, n);
     if (st != WM_OK)
         goto cleanup;
 
@@ -1033,27 +1070,6 @@ cleanup:
     free(out);
     free(queue);
     free(state);
-    free(cnt);
-    free(ktmp);
-    free(keys);
-    free(m.p);
-    free(m.v);
-    free(m.tw);
-    free(m.con);
-    free(m.ve);
-    free(m.tstamp);
-    free(m.vstamp);
-    free(m.stack.a);
-    for (int s = 0; s < 2; s++)
-    {
-        free(m.side[s].v.a);
-        free(m.side[s].hc.a);
-        free(m.side[s].o.a);
-        free(m.side[s].fl.a);
-        free(m.side[s].anten.a);
-    }
-    free(m.cav.a);
-    free(m.tstk.a);
-    free(m.pend.a);
+    mesh_free(&m);
     return st;
 }

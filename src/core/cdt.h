@@ -32,6 +32,20 @@ extern "C"
                                  size_t nrings, uint32_t **tris, size_t *ntris,
                                  const wm_ctx *ctx);
 
+    /**
+     * wm_cdt_triangulate with `nextra` more vertices after the rings'
+     * (pts[ring_start[nrings] ..]), each strictly inside the polygon and
+     * on no ring edge, distinct from every other vertex: the constrained
+     * Delaunay triangulation of the polygon and those points (Steiner
+     * points, refine.c). *ntris is then npts + 2 * (nrings - 1) - 2 +
+     * 2 * nextra, and WM_ERR_INVALID also says an extra point is not
+     * strictly inside.
+     */
+    wm_status wm_cdt_triangulate_ex(const wm_pt *pts, const size_t *ring_start,
+                                    size_t nrings, size_t nextra,
+                                    uint32_t **tris, size_t *ntris,
+                                    const wm_ctx *ctx);
+
 #ifdef __cplusplus
 }
 #endif

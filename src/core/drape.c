@@ -268,17 +268,9 @@ static int nearest(const index_t *ix, int64_t X, int64_t Y,
         return 0;
     if (blake)
     {
-        const wm_scene *sc = ix->s;
-        size_t lo = 0, hi = sc->npolys; /* the polygon holding edge bglob */
-        while (hi - lo > 1)
-        {
-            const size_t mid = lo + (hi - lo) / 2;
-            if (sc->poly_start[mid] <= bglob)
-                lo = mid;
-            else
-                hi = mid;
-        }
-        *body = ix->d->poly_body[lo];
+        /* the polygon holding edge bglob */
+        const size_t p = wm_run_of(ix->s->poly_start, ix->s->npolys, bglob);
+        *body = ix->d->poly_body[p];
         *z = ix->d->body_level[*body];
     }
     else
@@ -319,7 +311,7 @@ wm_status wm_drape_block(const wm_scene *s, const wm_drape *d,
 {
     index_t ix;
     memset(&ix, 0, sizeof ix);
-    double *z = calloc(res->rings.npts + 1, sizeof *z);
+    double *z = calloc(wm_block_npoints(res) + 1, sizeof *z);
     int32_t *pb = malloc((res->npolys + 1) * sizeof *pb);
     wm_status st = WM_ERR_NOMEM;
     if (!z || !pb || index_build(&ix, s, d, res->bx, res->by) != WM_OK)
@@ -336,6 +328,11 @@ wm_status wm_drape_block(const wm_scene *s, const wm_drape *d,
             if (body >= 0 && (pb[p] < 0 || body < pb[p]))
                 pb[p] = body;
         }
+    }
+    for (size_t k = 0; k < res->nxpts; k++) /* Steiner points */
+    {
+        int32_t body;
+        height(&ix, res->xpts[k], &z[res->rings.npts + k], &body);
     }
     free(res->z);
     free(res->poly_body);

@@ -29,7 +29,8 @@ extern "C"
     } wm_drape;
 
     /**
-     * Sets res->z (one height per point of res->rings, owned by res) and
+     * Sets res->z (one height per point of res->rings, then of res->xpts,
+     * owned by res) and
      * res->poly_body (per polygon: the lowest body whose level one of its
      * points took, or -1).
      *

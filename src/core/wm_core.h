@@ -211,6 +211,22 @@ extern "C"
     /** Frees what g owns (g may be NULL) and zeroes it. */
     void wm_cells_free(wm_cells *g);
 
+    /** The run holding index x of offsets start[0 .. n] (ascending,
+     *  start[0] <= x < start[n]): the last k < n with start[k] <= x. */
+    static inline size_t wm_run_of(const size_t *start, size_t n, size_t x)
+    {
+        size_t lo = 0, hi = n;
+        while (hi - lo > 1)
+        {
+            const size_t mid = lo + (hi - lo) / 2;
+            if (start[mid] <= x)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        return lo;
+    }
+
     /** Number of vertices of ring i. */
     static inline size_t wm_rings_len(const wm_rings *r, size_t i)
     {

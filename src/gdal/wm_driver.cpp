@@ -229,7 +229,7 @@ CPLErr WaterMeshDataset::GetGeoTransform(double *gt)
 /* Bytes a block result holds. */
 static size_t result_bytes(const wm_block_result *r)
 {
-    return sizeof *r + r->rings.pts_cap * sizeof(wm_pt) +
+    return sizeof *r + (r->rings.pts_cap + r->nxpts) * sizeof(wm_pt) +
            r->rings.start_cap * sizeof(size_t) +
            2 * (r->npolys + 1) * sizeof(size_t) +
            (r->poly_tri ? r->poly_tri[r->npolys] : 0) * 3 * sizeof(uint32_t);
@@ -733,6 +733,13 @@ static const char OPEN_OPTIONS[] =
     "Polygon feature per triangle)'>"
     "    <Value>MULTIPOLYGON</Value><Value>TIN</Value><Value>TRIANGLES</Value>"
     "  </Option>"
+    "  <Option name='MIN_ANGLE' type='float' default='0' min='0' max='30' "
+    "description='Refine the mesh (Steiner points) so that no triangle has "
+    "an angle below this, in degrees (0: off; 20.7 guaranteed but at input "
+    "angles and next to block sides)'/>"
+    "  <Option name='MAX_EDGE' type='float' default='0' min='0' "
+    "description='Refine the mesh so that no triangle edge is longer than "
+    "this (metres; 0: off; at least PIXEL_SIZE)'/>"
     "  <Option name='ELEVATION' type='string' description='An elevation "
     "raster (any GDAL raster and CRS): both layers get Z, lakes flat at a "
     "shoreline percentile, rivers level bank to bank and never rising "

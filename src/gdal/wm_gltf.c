@@ -152,9 +152,10 @@ static unsigned char *bin_chunk(const WMScene *s, const wm_block_result *r,
     }
     for (size_t i = 0; i < nv; i++)
     {
-        const float v[3] = {(float)(r->rings.pts[i].x * s->unit),
+        const wm_pt p = wm_block_point(r, i);
+        const float v[3] = {(float)(p.x * s->unit),
                             r->z ? (float)r->z[i] : 0.0f,
-                            -(float)(r->rings.pts[i].y * s->unit)};
+                            -(float)(p.y * s->unit)};
         for (int k = 0; k < 3; k++)
         {
             pos[3 * i + (size_t)k] = v[k];
@@ -231,7 +232,7 @@ static char *json_chunk(const glb_sink *g, const wm_block_result *r, size_t nv,
 static int write_glb(const glb_sink *g, const wm_block_result *r,
                      const char *path, double x0, double y0)
 {
-    const size_t nv = r->rings.npts, nt = r->poly_tri[r->npolys];
+    const size_t nv = wm_block_npoints(r), nt = r->poly_tri[r->npolys];
     float min[3], max[3];
     unsigned char *bin = bin_chunk(g->s, r, nv, nt, min, max);
     if (!bin)
@@ -281,12 +282,12 @@ static int glb_block(void *user, wm_block_result *r)
             VSIUnlink(tmp);
         else if ((ok = wm_grow((void **)&g->entries, &g->cap, g->nentries + 1,
                                sizeof *g->entries)) != 0)
-            g->entries[g->nentries++] = CPLStrdup(
-                CPLSPrintf("{\"file\":\"%s\",\"block\":[%lld,%lld],"
-                           "\"origin\":[%.17g,%.17g],\"triangles\":%zu,"
-                           "\"vertices\":%zu}",
-                           file, (long long)r->bx, (long long)r->by, x0, y0,
-                           (size_t)r->poly_tri[r->npolys], r->rings.npts));
+            g->entries[g->nentries++] = CPLStrdup(CPLSPrintf(
+                "{\"file\":\"%s\",\"block\":[%lld,%lld],"
+                "\"origin\":[%.17g,%.17g],\"triangles\":%zu,"
+                "\"vertices\":%zu}",
+                file, (long long)r->bx, (long long)r->by, x0, y0,
+                (size_t)r->poly_tri[r->npolys], wm_block_npoints(r)));
         else
             CPLError(CE_Failure, CPLE_OutOfMemory, "WATERMESH: out of memory.");
         CPLFree(file);

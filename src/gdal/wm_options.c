@@ -37,6 +37,8 @@ const char *const WM_OPTION_NAMES[] = {"RIVERS",
                                        "TARGET_SRS",
                                        "MIN_FEATURE_AREA",
                                        "MESH_GEOMETRY",
+                                       "MIN_ANGLE",
+                                       "MAX_EDGE",
                                        "ELEVATION",
                                        "ELEVATION_BAND",
                                        "LAKE_LEVEL_PERCENTILE",
@@ -315,6 +317,25 @@ static int params_parse(CSLConstList opts, WMParams *p)
         CPLError(CE_Failure, CPLE_IllegalArg,
                  "WATERMESH: MIN_FEATURE_AREA=%g must be >= 0.",
                  p->min_feature_area);
+        return FALSE;
+    }
+    if (!number(opts, "MIN_ANGLE", 0.0, &p->min_angle) ||
+        !number(opts, "MAX_EDGE", 0.0, &p->max_edge))
+        return FALSE;
+    if (!(p->min_angle >= 0 && p->min_angle <= 30))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: MIN_ANGLE=%g: expected 0 (off) to 30 degrees "
+                 "(20.7 is guaranteed; above it refinement may not end).",
+                 p->min_angle);
+        return FALSE;
+    }
+    if (!(p->max_edge == 0 || p->max_edge >= p->pixel))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: MAX_EDGE=%g: expected 0 (off) or at least "
+                 "PIXEL_SIZE (%g).",
+                 p->max_edge, p->pixel);
         return FALSE;
     }
     const char *g = CSLFetchNameValueDef(opts, "MESH_GEOMETRY", "MULTIPOLYGON");

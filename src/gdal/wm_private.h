@@ -55,6 +55,8 @@ typedef struct
     int heuristic;           /* HEURISTIC, a wm_heuristic (METHOD=PAPER) */
     double merge;            /* MERGE_DISTANCE, m; 0: off */
     double min_feature_area; /* MIN_FEATURE_AREA, m^2; 0: off */
+    double min_angle;        /* MIN_ANGLE, degrees; 0: off */
+    double max_edge;         /* MAX_EDGE, m; 0: off */
     WMMeshForm mesh_form;    /* MESH_GEOMETRY */
     WMDeviceKind device;
     int num_threads;
@@ -231,6 +233,7 @@ typedef struct
     double wall;
     size_t blocks, polygons, vertices, triangles, mixed_tiles;
     uint64_t samples, pairs, contour_vertices;
+    size_t steiner, small_input, left; /* MIN_ANGLE / MAX_EDGE */
 } WMRunStats;
 
 /** A wm_error_fn keeping the first message in *(char **)user (CPLStrdup'ed;

@@ -206,6 +206,8 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     r.opts.heuristic = s->params.heuristic;
     r.opts.merge = s->params.merge / s->unit;
     r.opts.min_area = s->params.min_feature_area / (s->unit * s->unit);
+    r.opts.min_angle = s->params.min_angle;
+    r.opts.max_edge = s->params.max_edge / s->unit;
     r.opts.dev = WMDeviceField(s->device);
     r.pipelined = r.opts.dev != NULL;
     r.slot = CPLCalloc(r.window, sizeof *r.slot);
@@ -278,6 +280,9 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
         stats->samples += res.samples;
         stats->pairs += res.pairs;
         stats->contour_vertices += res.contour_vertices;
+        stats->steiner += res.steiner;
+        stats->small_input += res.small_input;
+        stats->left += res.left;
         if (!sink(user, &res))
         {
             err = CE_Failure;
@@ -333,7 +338,7 @@ static void set_point(OGRGeometryH g, int i, const WMScene *s,
                       const wm_block_result *r, size_t k)
 {
     double x, y;
-    world(s, r, r->rings.pts[k], &x, &y);
+    world(s, r, wm_block_point(r, k), &x, &y);
     if (r->z)
         OGR_G_SetPoint(g, i, x, y, r->z[k]);
     else
@@ -512,6 +517,13 @@ void WMPrintStats(const WMScene *s, const WMRunStats *st)
     printf("polygons %lu, output vertices %lu, triangles %lu\n",
            (unsigned long)st->polygons, (unsigned long)st->vertices,
            (unsigned long)st->triangles);
+    if (s->params.min_angle > 0 || s->params.max_edge > 0)
+        printf("refinement: %lu points added; %lu triangles below MIN_ANGLE "
+               "at input angles (between two ring edges); %lu others below "
+               "MIN_ANGLE or over MAX_EDGE (next to block sides, or not "
+               "converged)\n",
+               (unsigned long)st->steiner, (unsigned long)st->small_input,
+               (unsigned long)st->left);
     const size_t *ws = s->width_source;
     if (ws[0] + ws[1] + ws[2])
         printf("river widths: %lu from WIDTH_FIELD, %lu from WIDTH_BY_CLASS, "
@@ -583,6 +595,9 @@ static void add_stats(WMRunStats *to, const WMRunStats *st)
     to->samples += st->samples;
     to->pairs += st->pairs;
     to->contour_vertices += st->contour_vertices;
+    to->steiner += st->steiner;
+    to->small_input += st->small_input;
+    to->left += st->left;
 }
 
 /* Keeps the blocks of batch (n pairs) that are the job's (SHARD). */

@@ -1,0 +1,739 @@
+/*
+ * refine.c - Delaunay refinement of a polygon's constrained Delaunay
+ * triangulation (MIN_ANGLE, MAX_EDGE).
+ *
+ * Method: Ruppert's algorithm (J. Ruppert, "A Delaunay refinement
+ * algorithm for quality 2-dimensional mesh generation", J. Algorithms
+ * 1995), in rounds. Each round triangulates the polygon with the points
+ * added so far (cdt.c, wm_cdt_triangulate_ex), then looks at every
+ * triangle: a bad one (smallest angle below min_angle, unless that angle
+ * lies between two ring edges, an input angle no point can cure; or an
+ * edge over max_edge) proposes its circumcentre. A walk through the
+ * triangles from the bad one towards the circumcentre finds the triangle
+ * holding it, or the ring edge that hides it; a ring edge crossed, or one
+ * of the holding triangle's or its neighbours' ring edges whose diametral
+ * circle holds the point, is split at its midpoint instead (Ruppert's
+ * encroachment rule). The round's points and splits are then applied
+ * together. Points are rounded to the lattice, so the CDT's predicates stay
+ * exact; a split shore edge's midpoint moves by at most half a lattice
+ * unit. Ring edges on the block square are never split here (the block
+ * across could not know): with max_edge they are cut beforehand at the
+ * global multiples of max_edge along the side.
+ *
+ * Cost: one CDT per round (O(n log n)), O(n) to rate the triangles and
+ * O(walk) per bad one; rounds until nothing changes, at most MAX_ROUNDS.
+ * Memory: O(n) for the points, the rings and two hash tables.
+ *
+ * Robustness: the triangulation's decisions are cdt.c's exact predicates;
+ * angles and lengths, which only choose what to refine, are doubles. A
+ * refined polygon the CDT refuses (a rounded midpoint too close to another
+ * edge) ends the refinement with the last good triangulation.
+ */
+#include "refine.h"
+
+#include "cdt.h"
+#include "lattice.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_ROUNDS 256
+#define PI 3.14159265358979323846
+
+/* Floor division, b > 0. */
+static int64_t floordiv(int64_t a, int64_t b)
+{
+    const int64_t q = a / b;
+    return (a % b != 0 && a < 0) ? q - 1 : q;
+}
+
+/* A growable array of int32 (ring point indices, Steiner points). */
+typedef struct
+{
+    int32_t *a;
+    size_t n, cap;
+} ibuf;
+
+static int ibuf_push(ibuf *b, int32_t x)
+{
+    return wm_push((void **)&b->a, &b->n, &b->cap, &x, sizeof x);
+}
+
+/* Open-addressing map from nonzero 64-bit keys to int64 values. */
+typedef struct
+{
+    uint64_t *k;
+    int64_t *v;
+    size_t cap; /* a power of two, or 0 */
+} map64;
+
+static uint64_t mix(uint64_t x)
+{
+    x ^= x >> 33;
+    x *= UINT64_C(0xff51afd7ed558ccd);
+    x ^= x >> 33;
+    return x;
+}
+
+static int map_init(map64 *m, size_t n)
+{
+    size_t cap = 16;
+    while (cap < 2 * n + 16)
+        cap *= 2;
+    free(m->k);
+    free(m->v);
+    m->k = calloc(cap, sizeof *m->k);
+    m->v = malloc(cap * sizeof *m->v);
+    m->cap = cap;
+    return m->k && m->v;
+}
+
+static void map_put(map64 *m, uint64_t key, int64_t val)
+{
+    size_t i = mix(key) & (m->cap - 1);
+    while (m->k[i] && m->k[i] != key)
+        i = (i + 1) & (m->cap - 1);
+    m->k[i] = key;
+    m->v[i] = val;
+}
+
+static int64_t map_get(const map64 *m, uint64_t key)
+{
+    size_t i = mix(key) & (m->cap - 1);
+    while (m->k[i])
+    {
+        if (m->k[i] == key)
+            return m->v[i];
+        i = (i + 1) & (m->cap - 1);
+    }
+    return -1;
+}
+
+static uint64_t pair_key(int32_t a, int32_t b)
+{
+    return ((uint64_t)(uint32_t)a << 32 | (uint32_t)b) + 1;
+}
+
+static uint64_t undirected(int32_t a, int32_t b)
+{
+    return a < b ? pair_key(a, b) : pair_key(b, a);
+}
+
+static uint64_t point_key(wm_pt p)
+{
+    return ((uint64_t)(uint32_t)p.x << 32 | (uint32_t)p.y) + 1;
+}
+
+typedef struct
+{
+    const wm_refine_opts *o;
+    const wm_ctx *ctx;
+    wm_pt *P; /* every point: the input's, then the added ones */
+    size_t np, pcap;
+    ibuf ring;      /* the rings' point indices, concatenated */
+    size_t *rstart; /* nrings + 1 */
+    size_t nrings;
+    ibuf steiner; /* points strictly inside */
+    map64 pts;    /* point -> index: no point twice */
+    /* the current triangulation */
+    uint32_t *tris;
+    size_t ntris;
+    map64 half;  /* directed edge (a, b) -> 3t + i */
+    map64 redge; /* ring edge {a, b} -> ring position (index into ring) */
+    /* the round's changes */
+    uint8_t *split;   /* per ring position: its edge splits (size ring.n) */
+    uint8_t *touched; /* per triangle: near a change of this round */
+    size_t nsplit, nnew;
+    double cos_min; /* cos(min_angle), or 2 (off) */
+    double max2;    /* max_edge^2, or INFINITY */
+} refiner;
+
+static int add_point(refiner *r, wm_pt p, int32_t *idx)
+{
+    const int64_t have = map_get(&r->pts, point_key(p));
+    if (have >= 0)
+    {
+        *idx = (int32_t)have;
+        return 1;
+    }
+    if (!wm_push((void **)&r->P, &r->np, &r->pcap, &p, sizeof p))
+        return 0;
+    *idx = (int32_t)(r->np - 1);
+    if (2 * r->np + 16 > r->pts.cap)
+    {
+        map64 m = {NULL, NULL, 0};
+        if (!map_init(&m, 2 * r->np))
+            return 0;
+        for (size_t i = 0; i < r->np; i++)
+            map_put(&m, point_key(r->P[i]), (int64_t)i);
+        free(r->pts.k);
+        free(r->pts.v);
+        r->pts = m;
+    }
+    else
+        map_put(&r->pts, point_key(p), *idx);
+    return 1;
+}
+
+/* Whether ring edge a-b lies on the block square. */
+static int on_square(const refiner *r, wm_pt a, wm_pt b)
+{
+    const int32_t S = r->o->side;
+    return (a.x == b.x && (a.x == 0 || a.x == S)) ||
+           (a.y == b.y && (a.y == 0 || a.y == S));
+}
+
+/* Cuts the ring edges on the block square longer than max_edge at the
+ * global multiples of max_edge along the side (exact lattice points on
+ * the edge; both blocks sharing the side find the same). */
+static int cut_square_edges(refiner *r)
+{
+    const int64_t L = (int64_t)floor(r->o->max_edge);
+    if (L < 1)
+        return 1;
+    ibuf out = {NULL, 0, 0};
+    size_t *ns = malloc((r->nrings + 1) * sizeof *ns);
+    int ok = ns != NULL;
+    for (size_t q = 0; ok && q < r->nrings; q++)
+    {
+        ns[q] = out.n;
+        const size_t b0 = r->rstart[q], len = r->rstart[q + 1] - b0;
+        for (size_t i = 0; ok && i < len; i++)
+        {
+            const int32_t ia = r->ring.a[b0 + i];
+            const int32_t ib = r->ring.a[b0 + (i + 1) % len];
+            ok = ibuf_push(&out, ia);
+            const wm_pt a = r->P[ia], b = r->P[ib];
+            if (!ok || !on_square(r, a, b))
+                continue;
+            const int vertical = a.x == b.x;
+            const int64_t o = vertical ? r->o->Y0 : r->o->X0;
+            const int64_t ga = o + (vertical ? a.y : a.x);
+            const int64_t gb = o + (vertical ? b.y : b.x);
+            if ((ga < gb ? gb - ga : ga - gb) <= L)
+                continue;
+            const int64_t step = ga < gb ? L : -L;
+            /* the first multiple of L strictly past ga towards gb */
+            int64_t g =
+                ga < gb ? (floordiv(ga, L) + 1) * L : floordiv(ga - 1, L) * L;
+            for (; ga < gb ? g < gb : g > gb; g += step)
+            {
+                const wm_pt m = vertical ? (wm_pt){a.x, (int32_t)(g - o)}
+                                         : (wm_pt){(int32_t)(g - o), a.y};
+                int32_t im;
+                ok = add_point(r, m, &im) && ibuf_push(&out, im);
+            }
+        }
+    }
+    if (ok)
+    {
+        ns[r->nrings] = out.n;
+        free(r->ring.a);
+        free(r->rstart);
+        r->ring = out;
+        r->rstart = ns;
+        return 1;
+    }
+    free(out.a);
+    free(ns);
+    return 0;
+}
+
+/* Triangulates the rings and the Steiner points; indexes the result. */
+static wm_status triangulate(refiner *r)
+{
+    const size_t nin = r->ring.n + r->steiner.n;
+    wm_pt *in = malloc((nin + 1) * sizeof *in);
+    if (!in)
+        return wm_fail(r->ctx, WM_ERR_NOMEM, "refine: out of memory");
+    for (size_t i = 0; i < r->ring.n; i++)
+        in[i] = r->P[r->ring.a[i]];
+    for (size_t i = 0; i < r->steiner.n; i++)
+        in[r->ring.n + i] = r->P[r->steiner.a[i]];
+    uint32_t *t = NULL;
+    size_t nt = 0;
+    const wm_ctx quiet = {NULL, NULL, r->ctx ? r->ctx->cancel : NULL};
+    wm_status st = wm_cdt_triangulate_ex(in, r->rstart, r->nrings, r->steiner.n,
+                                         &t, &nt, &quiet);
+    free(in);
+    if (st != WM_OK)
+        return st;
+    for (size_t i = 0; i < 3 * nt; i++) /* to point indices */
+        t[i] = (uint32_t)(t[i] < r->ring.n ? r->ring.a[t[i]]
+                                           : r->steiner.a[t[i] - r->ring.n]);
+    free(r->tris);
+    r->tris = t;
+    r->ntris = nt;
+    if (!map_init(&r->half, 3 * nt) || !map_init(&r->redge, r->ring.n))
+        return wm_fail(r->ctx, WM_ERR_NOMEM, "refine: out of memory");
+    for (size_t h = 0; h < 3 * nt; h++)
+        map_put(&r->half,
+                pair_key((int32_t)t[h], (int32_t)t[h - h % 3 + (h + 1) % 3]),
+                (int64_t)h);
+    for (size_t q = 0; q < r->nrings; q++)
+    {
+        const size_t b0 = r->rstart[q], len = r->rstart[q + 1] - b0;
+        for (size_t i = 0; i < len; i++)
+            map_put(
+                &r->redge,
+                undirected(r->ring.a[b0 + i], r->ring.a[b0 + (i + 1) % len]),
+                (int64_t)(b0 + i));
+    }
+    return WM_OK;
+}
+
+static double d2(wm_pt a, wm_pt b)
+{
+    const double dx = (double)a.x - b.x, dy = (double)a.y - b.y;
+    return dx * dx + dy * dy;
+}
+
+/* Triangle t's badness: 0 fine, else LONG (an edge over max_edge) and/or
+ * SHARP (an angle below min_angle, not an input angle); *input set when
+ * its smallest angle lies between two ring edges. */
+#define LONG 1
+#define SHARP 2
+static int bad(const refiner *r, size_t t, int *input)
+{
+    const uint32_t *v = r->tris + 3 * t;
+    const wm_pt p[3] = {r->P[v[0]], r->P[v[1]], r->P[v[2]]};
+    double l[3]; /* l[i]: squared length of the edge opposite vertex i */
+    for (int i = 0; i < 3; i++)
+        l[i] = d2(p[(i + 1) % 3], p[(i + 2) % 3]);
+    *input = 0;
+    int s = 0; /* the smallest angle is opposite the shortest edge */
+    for (int i = 1; i < 3; i++)
+        s = l[i] < l[s] ? i : s;
+    const double b2 = l[(s + 1) % 3], c2 = l[(s + 2) % 3];
+    const double cosa = (b2 + c2 - l[s]) / (2 * sqrt(b2 * c2));
+    int is_bad = l[0] > r->max2 || l[1] > r->max2 || l[2] > r->max2 ? LONG : 0;
+    if (cosa > r->cos_min)
+    {
+        /* the two edges at vertex s */
+        const int32_t a = (int32_t)v[s], b = (int32_t)v[(s + 1) % 3];
+        const int32_t c = (int32_t)v[(s + 2) % 3];
+        *input = map_get(&r->redge, undirected(a, b)) >= 0 &&
+                 map_get(&r->redge, undirected(a, c)) >= 0;
+        is_bad |= *input ? 0 : SHARP;
+    }
+    return is_bad;
+}
+
+/* The circumcentre of triangle t, rounded to the lattice; 0 when it is
+ * too far to matter (a nearly flat triangle: its longest edge is split
+ * through the walk instead). */
+static int circumcentre(const refiner *r, size_t t, wm_pt *c)
+{
+    const uint32_t *v = r->tris + 3 * t;
+    const wm_pt a = r->P[v[0]], b = r->P[v[1]], q = r->P[v[2]];
+    const double bx = (double)b.x - a.x, by = (double)b.y - a.y;
+    const double cx = (double)q.x - a.x, cy = (double)q.y - a.y;
+    const double d = 2 * (bx * cy - by * cx);
+    if (d == 0)
+        return 0;
+    const double b2 = bx * bx + by * by, c2 = cx * cx + cy * cy;
+    const double ux = a.x + (cy * b2 - by * c2) / d;
+    const double uy = a.y + (bx * c2 - cx * b2) / d;
+    const double lim = 2.0 * WM_LOCAL_MAX;
+    if (!(fabs(ux) < lim && fabs(uy) < lim))
+        return 0;
+    c->x = (int32_t)llround(ux);
+    c->y = (int32_t)llround(uy);
+    return 1;
+}
+
+/* Marks ring position k's edge to be split; 0 when it may not be (on the
+ * block square, or too short). */
+static int want_split(refiner *r, int64_t k)
+{
+    const size_t q0 = (size_t)k;
+    const size_t q = wm_run_of(r->rstart, r->nrings, q0);
+    const size_t len = r->rstart[q + 1] - r->rstart[q];
+    const wm_pt a = r->P[r->ring.a[q0]];
+    const wm_pt b =
+        r->P[r->ring.a[r->rstart[q] + (q0 - r->rstart[q] + 1) % len]];
+    if (on_square(r, a, b) || d2(a, b) < 4)
+        return 0;
+    r->nsplit += !r->split[q0];
+    r->split[q0] = 1;
+    return 1;
+}
+
+/* The ring edge among the edges of triangle t and its neighbours whose
+ * diametral circle holds c: its ring position, or -1. */
+static int64_t encroached(const refiner *r, size_t t, wm_pt c)
+{
+    size_t tri[4] = {t, t, t, t};
+    for (int i = 0; i < 3; i++)
+    {
+        const uint32_t *v = r->tris + 3 * t;
+        const int64_t g =
+            map_get(&r->half, pair_key((int32_t)v[(i + 1) % 3], (int32_t)v[i]));
+        if (g >= 0)
+            tri[i + 1] = (size_t)g / 3;
+    }
+    for (int k = 0; k < 4; k++)
+        for (int i = 0; i < 3; i++)
+        {
+            const uint32_t *v = r->tris + 3 * tri[k];
+            const int32_t a = (int32_t)v[i], b = (int32_t)v[(i + 1) % 3];
+            const int64_t pos = map_get(&r->redge, undirected(a, b));
+            if (pos < 0)
+                continue;
+            const wm_pt pa = r->P[a], pb = r->P[b];
+            const double dot = ((double)pa.x - c.x) * ((double)pb.x - c.x) +
+                               ((double)pa.y - c.y) * ((double)pb.y - c.y);
+            if (dot <= 0)
+                return pos;
+        }
+    return -1;
+}
+
+/* Walks from triangle t towards c: the triangle holding c (*hold), or the
+ * ring edge crossed on the way (its position; *hold = SIZE_MAX). Returns
+ * 0 when the walk fails (a step bound). */
+static int walk(const refiner *r, size_t t, wm_pt c, size_t *hold,
+                int64_t *crossed)
+{
+    for (size_t steps = 0; steps <= r->ntris; steps++)
+    {
+        const uint32_t *v = r->tris + 3 * t;
+        int moved = 0;
+        for (int i = 0; i < 3 && !moved; i++)
+        {
+            const int32_t a = (int32_t)v[i], b = (int32_t)v[(i + 1) % 3];
+            if (wm_orient(r->P[a], r->P[b], c) >= 0)
+                continue;
+            const int64_t pos = map_get(&r->redge, undirected(a, b));
+            if (pos >= 0)
+            {
+                *hold = SIZE_MAX;
+                *crossed = pos;
+                return 1;
+            }
+            const int64_t g = map_get(&r->half, pair_key(b, a));
+            if (g < 0)
+                return 0;
+            t = (size_t)g / 3;
+            moved = 1;
+        }
+        if (!moved)
+        {
+            *hold = t;
+            return 1;
+        }
+    }
+    return 0;
+}
+
+/* Marks triangle t and its neighbours as changed by this round: their
+ * bad ones wait for the next (inserting points whose cavities overlap in
+ * one batch would crowd them: Ruppert's algorithm inserts one at a time). */
+static void touch(refiner *r, size_t t)
+{
+    const uint32_t *v = r->tris + 3 * t;
+    r->touched[t] = 1;
+    for (int i = 0; i < 3; i++)
+    {
+        const int64_t g =
+            map_get(&r->half, pair_key((int32_t)v[(i + 1) % 3], (int32_t)v[i]));
+        if (g >= 0)
+            r->touched[g / 3] = 1;
+    }
+}
+
+/* The midpoint of triangle t's longest edge that is not a ring edge,
+ * rounded: where a point goes when t's circumcentre would split a ring
+ * edge that may not be split (on the block square, or too short). 0 when
+ * every edge of t is a ring edge. */
+static int interior_midpoint(const refiner *r, size_t t, wm_pt *m)
+{
+    const uint32_t *v = r->tris + 3 * t;
+    double best = -1;
+    for (int i = 0; i < 3; i++)
+    {
+        const int32_t a = (int32_t)v[i], b = (int32_t)v[(i + 1) % 3];
+        const double l = d2(r->P[a], r->P[b]);
+        if (l <= best || map_get(&r->redge, undirected(a, b)) >= 0)
+            continue;
+        best = l;
+        m->x = (int32_t)(((int64_t)r->P[a].x + r->P[b].x) >> 1);
+        m->y = (int32_t)(((int64_t)r->P[a].y + r->P[b].y) >> 1);
+    }
+    return best >= 4;
+}
+
+/* Adds Steiner point c, held by triangle hold, for bad triangle t: 1
+ * added, 0 not (a point already there), -1 out of memory. */
+static int add_steiner(refiner *r, size_t t, size_t hold, wm_pt c)
+{
+    const size_t before = r->np;
+    int32_t idx;
+    if (!add_point(r, c, &idx))
+        return -1;
+    if (r->np == before)
+        return 0;
+    if (!ibuf_push(&r->steiner, idx))
+        return -1;
+    r->nnew++;
+    touch(r, t);
+    touch(r, hold);
+    return 1;
+}
+
+/* What bad triangle t does this round: splits a ring edge or adds its
+ * circumcentre (1), waits for a neighbour's change (2), can do nothing
+ * (0), or runs out of memory (-1). */
+static int cure(refiner *r, size_t t, int why)
+{
+    if (r->touched[t])
+        return 2;
+    wm_pt c;
+    size_t hold;
+    int64_t pos = -1;
+    if (!circumcentre(r, t, &c) || !walk(r, t, c, &hold, &pos))
+        return 0;
+    if (hold != SIZE_MAX)
+    {
+        if (r->touched[hold])
+            return 2;
+        pos = encroached(r, hold, c);
+    }
+    if (pos < 0)
+        return add_steiner(r, t, hold, c);
+    if (want_split(r, pos))
+    {
+        touch(r, t);
+        return 1;
+    }
+    /* a ring edge that stays: for a long triangle, the middle of its
+     * longest inner edge (edges halve: this ends); a sharp one stays */
+    if (!(why & LONG) || !interior_midpoint(r, t, &c) ||
+        !walk(r, t, c, &hold, &pos) || hold == SIZE_MAX)
+        return 0;
+    return r->touched[hold] ? 2 : add_steiner(r, t, hold, c);
+}
+
+/* One round: rates every triangle, collects circumcentres and splits. */
+static int rate(refiner *r, size_t *left, size_t *small_input, size_t *waiting)
+{
+    *left = *small_input = *waiting = 0;
+    for (size_t t = 0; t < r->ntris; t++)
+    {
+        int input;
+        const int why = bad(r, t, &input);
+        *small_input += input;
+        if (!why)
+            continue;
+        const int c = cure(r, t, why);
+        if (c < 0)
+            return 0;
+        *left += c == 0;
+        *waiting += c == 2;
+    }
+    return 1;
+}
+
+/* Applies the round's splits: midpoints rounded to the lattice. */
+static int apply_splits(refiner *r)
+{
+    ibuf out = {NULL, 0, 0};
+    size_t *ns = malloc((r->nrings + 1) * sizeof *ns);
+    uint8_t *was = calloc(r->np + 1, 1); /* ring points before the splits */
+    int ok = ns != NULL && was != NULL;
+    for (size_t i = 0; ok && i < r->ring.n; i++)
+        was[r->ring.a[i]] = 1;
+    for (size_t q = 0; ok && q < r->nrings; q++)
+    {
+        ns[q] = out.n;
+        const size_t b0 = r->rstart[q], len = r->rstart[q + 1] - b0;
+        for (size_t i = 0; ok && i < len; i++)
+        {
+            ok = ibuf_push(&out, r->ring.a[b0 + i]);
+            if (!ok || !r->split[b0 + i])
+                continue;
+            const wm_pt a = r->P[r->ring.a[b0 + i]];
+            const wm_pt b = r->P[r->ring.a[b0 + (i + 1) % len]];
+            const wm_pt m = {(int32_t)(((int64_t)a.x + b.x) >> 1),
+                             (int32_t)(((int64_t)a.y + b.y) >> 1)};
+            int32_t im;
+            const size_t before = r->np;
+            ok = add_point(r, m, &im);
+            /* a new point, or a Steiner point the rounding met; never a
+             * ring's vertex */
+            if (ok && (r->np > before || !was[im]))
+                ok = ibuf_push(&out, im);
+        }
+    }
+    free(was);
+    if (!ok)
+    {
+        free(out.a);
+        free(ns);
+        return 0;
+    }
+    ns[r->nrings] = out.n;
+    free(r->ring.a);
+    free(r->rstart);
+    r->ring = out;
+    r->rstart = ns;
+    /* a Steiner point the rounding of a midpoint met is a ring point now */
+    uint8_t *on = calloc(r->np + 1, 1);
+    if (!on)
+        return 0;
+    for (size_t i = 0; i < r->ring.n; i++)
+        on[r->ring.a[i]] = 1;
+    size_t k = 0;
+    for (size_t i = 0; i < r->steiner.n; i++)
+        if (!on[r->steiner.a[i]])
+            r->steiner.a[k++] = r->steiner.a[i];
+    r->steiner.n = k;
+    free(on);
+    return 1;
+}
+
+static void refiner_free(refiner *r)
+{
+    free(r->P);
+    free(r->ring.a);
+    free(r->rstart);
+    free(r->steiner.a);
+    free(r->pts.k);
+    free(r->pts.v);
+    free(r->tris);
+    free(r->half.k);
+    free(r->half.v);
+    free(r->redge.k);
+    free(r->redge.v);
+    free(r->split);
+    free(r->touched);
+}
+
+/* Copies the current triangulation and the added points into the
+ * result (a good triangulation: the result so far). 0: out of memory. */
+static int snapshot(const refiner *r, size_t n, uint32_t **tris, size_t *ntris,
+                    wm_pt **extra, size_t *nextra)
+{
+    free(*tris);
+    free(*extra);
+    *tris = malloc((3 * r->ntris + 1) * sizeof **tris);
+    *extra = malloc((r->np - n + 1) * sizeof **extra);
+    if (!*tris || !*extra)
+        return 0;
+    memcpy(*tris, r->tris, 3 * r->ntris * sizeof **tris);
+    *ntris = r->ntris;
+    memcpy(*extra, r->P + n, (r->np - n) * sizeof **extra);
+    *nextra = r->np - n;
+    return 1;
+}
+
+/* Saves the current triangulation and points as the result. */
+static wm_status keep(refiner *r, size_t n, uint32_t **tris, size_t *ntris,
+                      wm_pt **extra, size_t *nextra)
+{
+    *extra = malloc((r->np - n + 1) * sizeof **extra);
+    if (!*extra)
+        return wm_fail(r->ctx, WM_ERR_NOMEM, "refine: out of memory");
+    memcpy(*extra, r->P + n, (r->np - n) * sizeof **extra);
+    *nextra = r->np - n;
+    *tris = r->tris;
+    *ntris = r->ntris;
+    r->tris = NULL;
+    return WM_OK;
+}
+
+wm_status wm_refine_triangulate(const wm_pt *pts, const size_t *ring_start,
+                                size_t nrings, const wm_refine_opts *o,
+                                uint32_t **tris, size_t *ntris, wm_pt **extra,
+                                size_t *nextra, wm_refine_stats *stats,
+                                const wm_ctx *ctx)
+{
+    refiner r;
+    memset(&r, 0, sizeof r);
+    r.o = o;
+    r.ctx = ctx;
+    *tris = NULL;
+    *extra = NULL;
+    *ntris = *nextra = 0;
+    const size_t n = ring_start[nrings];
+    r.cos_min = o->min_angle > 0 ? cos(o->min_angle * PI / 180.0) : 2.0;
+    r.max2 = o->max_edge > 0 ? o->max_edge * o->max_edge : INFINITY;
+    /* the input triangulation first: its errors are the caller's */
+    wm_status st =
+        wm_cdt_triangulate(pts, ring_start, nrings, &r.tris, &r.ntris, ctx);
+    if (st != WM_OK)
+        return st;
+    r.nrings = nrings;
+    r.rstart = malloc((nrings + 1) * sizeof *r.rstart);
+    r.P = malloc((n + 1) * sizeof *r.P);
+    if (!r.rstart || !r.P || !map_init(&r.pts, 2 * n))
+        goto nomem;
+    r.pcap = n + 1;
+    memcpy(r.rstart, ring_start, (nrings + 1) * sizeof *r.rstart);
+    for (size_t i = 0; i < n; i++)
+    {
+        r.P[r.np++] = pts[i];
+        map_put(&r.pts, point_key(pts[i]), (int64_t)i);
+        if (!ibuf_push(&r.ring, (int32_t)i))
+            goto nomem;
+    }
+    /* the most points: 16 per input vertex and, with max_edge, 8 per
+     * max_edge^2 of area (an equilateral mesh needs about 2.3) */
+    double area2 = 0;
+    for (size_t q = 0; q < nrings; q++)
+        area2 += (double)wm_ring_area2(pts + ring_start[q],
+                                       ring_start[q + 1] - ring_start[q]);
+    const double cap =
+        16.0 * (double)n + 4096 + (o->max_edge > 0 ? 4 * area2 / r.max2 : 0);
+    size_t left = 0, small_input = 0;
+    if (o->max_edge > 0 && !cut_square_edges(&r))
+        goto nomem;
+    for (int round = 0; round < MAX_ROUNDS; round++)
+    {
+        st = triangulate(&r);
+        if (st == WM_ERR_NOMEM)
+            goto done;
+        if (st != WM_OK)
+            break; /* keep the last good triangulation (r.tris) */
+        if (!snapshot(&r, n, tris, ntris, extra, nextra))
+            goto nomem;
+        free(r.split);
+        free(r.touched);
+        r.split = calloc(r.ring.n + 1, 1);
+        r.touched = calloc(r.ntris + 1, 1);
+        r.nsplit = r.nnew = 0;
+        size_t waiting = 0;
+        if (!r.split || !r.touched || !rate(&r, &left, &small_input, &waiting))
+            goto nomem;
+        if ((r.nsplit == 0 && r.nnew == 0) || (double)r.np > cap ||
+            wm_cancelled(ctx))
+            break;
+        if (r.nsplit && !apply_splits(&r))
+            goto nomem;
+    }
+    if (!*tris) /* the first refined round failed: the plain CDT */
+        st = keep(&r, n, tris, ntris, extra, nextra);
+    else
+        st = WM_OK;
+    if (stats && st == WM_OK)
+    {
+        stats->steiner += *nextra;
+        stats->small_input += small_input;
+        stats->left += left;
+    }
+    goto done;
+nomem:
+    st = wm_fail(ctx, WM_ERR_NOMEM, "refine: out of memory");
+done:
+    if (st != WM_OK)
+    {
+        free(*tris);
+        free(*extra);
+        *tris = NULL;
+        *extra = NULL;
+        *ntris = *nextra = 0;
+    }
+    refiner_free(&r);
+    return st;
+}

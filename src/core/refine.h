@@ -1,0 +1,73 @@
+/*
+ * refine.h - quality triangulation of a block's polygon: Steiner points so
+ * that triangles meet a minimum angle and a maximum edge length.
+ */
+#ifndef WM_REFINE_H
+#define WM_REFINE_H
+
+#include "wm_core.h"
+
+#ifdef __cplusplus
+extern "C"
+{
+#endif
+
+    /** What to refine to. */
+    typedef struct
+    {
+        double min_angle; /**< degrees; 0: no angle criterion */
+        double max_edge;  /**< lattice units; 0: no length criterion */
+        int32_t side;     /**< the block square's side, lattice units */
+        int64_t X0, Y0;   /**< the block's origin, global lattice */
+    } wm_refine_opts;
+
+    /** What refining left undone (statistics, summed over polygons). */
+    typedef struct
+    {
+        size_t steiner;     /**< points added (inside and on the shore) */
+        size_t small_input; /**< triangles below min_angle at an angle
+                                 between two ring edges (an input angle) */
+        size_t left;        /**< other triangles still below min_angle or
+                                 with an edge over max_edge */
+    } wm_refine_stats;
+
+    /**
+     * Triangulates one polygon as wm_cdt_triangulate does (same contract
+     * for pts, ring_start, nrings), then refines it (Ruppert 1995, with
+     * Shewchuk's "Delaunay refinement" rules): a triangle whose smallest
+     * angle is below min_angle, or whose longest edge is over max_edge,
+     * gets its circumcentre (rounded to the lattice) as a new vertex,
+     * unless that point lies across a ring edge or inside the diametral
+     * circle of one; then that ring edge is split at its midpoint (rounded
+     * to the lattice, so the shore moves by at most half a lattice unit).
+     * Ring edges on the block square are never split while refining: a
+     * neighbour block could not know. With max_edge, those longer than it
+     * are cut beforehand at the global lattice multiples of max_edge along
+     * the side, a rule both blocks sharing the side apply alike (so there
+     * is no T-junction). Rounds of batch insertion repeat until nothing is
+     * bad or a round changes nothing; bounds on rounds and points stop a
+     * run that does not converge (then `left` counts what remains).
+     *
+     * Guarantee (exact arithmetic): min_angle up to 20.7 degrees is met
+     * except at input angles below it (counted in small_input) and next
+     * to the block square; the lattice rounding and the square's fixed
+     * edges can leave a few more (counted in `left`).
+     *
+     * @param tris   out: 3 * *ntris indices into the input points followed
+     *               by *extra (index npts + k is (*extra)[k]); free() it
+     * @param extra  out: the added points (*nextra), block-local; free() it
+     * @return WM_OK, WM_ERR_NOMEM, or wm_cdt_triangulate's errors for the
+     *         input polygon (a refined polygon the CDT refuses ends the
+     *         refinement with the last good triangulation)
+     */
+    wm_status wm_refine_triangulate(const wm_pt *pts, const size_t *ring_start,
+                                    size_t nrings, const wm_refine_opts *o,
+                                    uint32_t **tris, size_t *ntris,
+                                    wm_pt **extra, size_t *nextra,
+                                    wm_refine_stats *stats, const wm_ctx *ctx);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* WM_REFINE_H */

@@ -1,0 +1,295 @@
+/*
+ * test_refine.c - wm_refine_triangulate: on polygons with holes, thin
+ * wedges, random stars and a block-square polygon, every result is a
+ * triangulation of the polygon (orientation, exact area, every input
+ * vertex used, ring edges kept or split), meets MIN_ANGLE except at input
+ * angles (counted), meets MAX_EDGE, and cuts block-square edges only at
+ * the global multiples of MAX_EDGE.
+ */
+#include "cdt.h"
+#include "lattice.h"
+#include "refine.h"
+#include "tap.h"
+
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#define PI 3.14159265358979323846
+
+static void push(wm_rings *r, int x, int y)
+{
+    wm_pt p = {x, y};
+    if (wm_rings_push(r, p) != WM_OK)
+        abort();
+}
+
+/* Pushes the n points xy[0..2n) as one closed ring. */
+static void ring(wm_rings *r, const int *xy, int n)
+{
+    for (int i = 0; i < n; i++)
+        push(r, xy[2 * i], xy[2 * i + 1]);
+    if (wm_rings_close(r) != WM_OK)
+        abort();
+}
+
+static double angle_min(wm_pt a, wm_pt b, wm_pt c)
+{
+    const wm_pt p[3] = {a, b, c};
+    double best = 180;
+    for (int i = 0; i < 3; i++)
+    {
+        const wm_pt o = p[i], u = p[(i + 1) % 3], v = p[(i + 2) % 3];
+        const double ux = u.x - o.x, uy = u.y - o.y;
+        const double vx = v.x - o.x, vy = v.y - o.y;
+        const double cs = (ux * vx + uy * vy) /
+                          sqrt((ux * ux + uy * uy) * (vx * vx + vy * vy));
+        const double deg = acos(cs > 1 ? 1 : (cs < -1 ? -1 : cs)) * 180 / PI;
+        best = deg < best ? deg : best;
+    }
+    return best;
+}
+
+typedef struct
+{
+    int ok_orient, ok_area, ok_used, ok_edge;
+    size_t below, ntris, nextra;
+    double area_in, area_out, worst_edge, perimeter;
+    wm_refine_stats st;
+} result;
+
+static wm_pt at(const wm_rings *r, const wm_pt *extra, uint32_t i)
+{
+    return i < r->npts ? r->pts[i] : extra[i - r->npts];
+}
+
+/* Refines rings r (ring 0 outer) and checks the result. */
+static result run(const wm_rings *r, const wm_refine_opts *o)
+{
+    result res;
+    memset(&res, 0, sizeof res);
+    uint32_t *tris = NULL;
+    wm_pt *extra = NULL;
+    size_t nt = 0, nx = 0;
+    const wm_status st = wm_refine_triangulate(
+        r->pts, r->start, r->nrings, o, &tris, &nt, &extra, &nx, &res.st, NULL);
+    if (st != WM_OK)
+        return res;
+    res.ntris = nt;
+    res.nextra = nx;
+    res.ok_orient = res.ok_used = res.ok_edge = 1;
+    wm_i128 a2 = 0, in2 = 0;
+    for (size_t q = 0; q < r->nrings; q++)
+        in2 += wm_ring_area2(r->pts + r->start[q], wm_rings_len(r, q));
+    for (size_t q = 0; q < r->nrings; q++)
+        for (size_t i = r->start[q]; i < r->start[q + 1]; i++)
+        {
+            const wm_pt a = r->pts[i];
+            const wm_pt b =
+                r->pts[i + 1 < r->start[q + 1] ? i + 1 : r->start[q]];
+            res.perimeter += hypot(a.x - b.x, a.y - b.y);
+        }
+    uint8_t *used = calloc(r->npts + 1, 1);
+    for (size_t t = 0; t < nt; t++)
+    {
+        const wm_pt a = at(r, extra, tris[3 * t]);
+        const wm_pt b = at(r, extra, tris[3 * t + 1]);
+        const wm_pt c = at(r, extra, tris[3 * t + 2]);
+        const int64_t d = wm_orient_det(a, b, c);
+        res.ok_orient &= d > 0;
+        a2 += d;
+        for (int k = 0; k < 3; k++)
+        {
+            if (tris[3 * t + k] < r->npts)
+                used[tris[3 * t + k]] = 1;
+            const wm_pt u = at(r, extra, tris[3 * t + k]);
+            const wm_pt v = at(r, extra, tris[3 * t + (k + 1) % 3]);
+            const double len = hypot(u.x - v.x, u.y - v.y);
+            res.worst_edge = len > res.worst_edge ? len : res.worst_edge;
+        }
+        if (o->min_angle > 0 && angle_min(a, b, c) < o->min_angle - 1e-9)
+            res.below++;
+    }
+    for (size_t i = 0; i < r->npts; i++)
+        res.ok_used &= used[i];
+    res.area_in = (double)in2;
+    res.area_out = (double)a2;
+    free(used);
+    free(tris);
+    free(extra);
+    return res;
+}
+
+/* (away from the block square's lines x, y = 0) */
+static void square_with_hole(wm_rings *r, int S)
+{
+    const int outer[] = {10, 10, S, 10, S, S, 10, S};
+    const int hole[] = {S / 3,         S / 3,          S / 3,     2 * S / 3,
+                        2 * S / 3 + 7, 2 * S / 3 - 11, 2 * S / 3, S / 3};
+    ring(r, outer, 4);
+    ring(r, hole, 4);
+}
+
+int main(void)
+{
+    /* a square with a hole, a long river-like strip, MIN_ANGLE 20 */
+    {
+        wm_rings r;
+        memset(&r, 0, sizeof r);
+        square_with_hole(&r, 30000);
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0};
+        result x = run(&r, &o);
+        TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
+               "square with hole: %zu triangles, %zu points added", x.ntris,
+               x.nextra);
+        TAP_OK(x.area_in == x.area_out,
+               "square with hole: area kept exactly (%.0f)", x.area_in);
+        TAP_EQ(x.below, x.st.small_input + x.st.left,
+               "square with hole: every triangle below 20 degrees is counted");
+        TAP_EQ(x.below, 0, "square with hole: none below 20 degrees");
+        wm_rings_free(&r);
+    }
+    {
+        wm_rings r;
+        memset(&r, 0, sizeof r);
+        /* a strip 100 wide and 20000 long, with a bend */
+        static const int strip[] = {10,    10,  10000, 300, 20000, 10,
+                                    20000, 110, 10000, 400, 10,    110};
+        ring(&r, strip, 6);
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0};
+        result x = run(&r, &o);
+        TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
+               "strip: %zu triangles, %zu points added", x.ntris, x.nextra);
+        TAP_OK(fabs(x.area_out - x.area_in) <= 0.5 * x.perimeter,
+               "strip: area within the rounding of split midpoints (half a "
+               "lattice unit along the shore) "
+               "(%.0f vs %.0f)",
+               x.area_out, x.area_in);
+        TAP_EQ(x.below, x.st.small_input + x.st.left,
+               "strip: every triangle below 20 degrees is counted");
+        TAP_OK(x.below <= x.st.small_input + 2,
+               "strip: below 20 degrees only at input angles (%zu, %zu input)",
+               x.below, x.st.small_input);
+        wm_rings_free(&r);
+    }
+    /* a thin wedge: its tip is an input angle of about 1 degree */
+    {
+        wm_rings r;
+        memset(&r, 0, sizeof r);
+        static const int wedge[] = {10, 10, 50000, 400, 50000, 1400};
+        ring(&r, wedge, 3);
+        wm_refine_opts o = {20, 3000, 1 << 20, 0, 0};
+        result x = run(&r, &o);
+        TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
+               "wedge: %zu triangles, %zu points", x.ntris, x.nextra);
+        TAP_OK(x.st.small_input >= 1,
+               "wedge: the 1-degree tip is reported "
+               "(%zu)",
+               x.st.small_input);
+        TAP_OK(x.worst_edge <= 3000 + 1e-9 || x.st.left > 0,
+               "wedge: MAX_EDGE 3000 met (longest %.1f) or counted",
+               x.worst_edge);
+        TAP_OK(x.worst_edge <= 3000 + 1e-9, "wedge: longest edge %.1f <= 3000",
+               x.worst_edge);
+        wm_rings_free(&r);
+    }
+    /* random stars with a hole, angle and length */
+    {
+        uint64_t s = 7;
+        size_t bad = 0, badlen = 0, fail = 0, area = 0, left = 0, below = 0;
+        for (int k = 0; k < 40; k++)
+        {
+            wm_rings r;
+            memset(&r, 0, sizeof r);
+            const int n = 12 + k % 20;
+            for (int i = 0; i < n; i++)
+            {
+                s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+                const double rad =
+                    20000 + (double)(s >> 40) / (1 << 24) * 20000;
+                const double th = 2 * PI * i / n;
+                push(&r, 50000 + (int)(rad * cos(th)),
+                     50000 + (int)(rad * sin(th)));
+            }
+            wm_rings_close(&r);
+            push(&r, 48000, 48000);
+            push(&r, 48000, 52000);
+            push(&r, 52000, 52000);
+            push(&r, 52000, 48000);
+            wm_rings_close(&r);
+            wm_refine_opts o = {20.7, 4000, 1 << 20, 0, 0};
+            result x = run(&r, &o);
+            fail += !(x.ntris > 0 && x.ok_orient && x.ok_used);
+            bad += x.below > x.st.small_input + x.st.left;
+            left += x.st.left;
+            below += x.below;
+            badlen += x.worst_edge > 4000 + 1e-9;
+            area += fabs(x.area_out - x.area_in) > 0.5 * x.perimeter;
+            wm_rings_free(&r);
+        }
+        TAP_EQ(fail, 0, "40 random stars: valid triangulations");
+        TAP_EQ(bad, 0,
+               "40 random stars: every triangle below 20.7 degrees "
+               "is counted");
+        TAP_EQ(badlen, 0, "40 random stars: MAX_EDGE 4000 met");
+        TAP_EQ(left, 0,
+               "40 random stars: nothing left unrefined (%zu below "
+               "20.7 degrees, all at input angles)",
+               below);
+        TAP_EQ(area, 0, "40 random stars: area kept");
+    }
+    /* a polygon filling the block square: its sides are cut only at the
+     * global multiples of MAX_EDGE (here the block's origin is 7 * S) */
+    {
+        const int S = 10000;
+        wm_rings r;
+        memset(&r, 0, sizeof r);
+        const int sq[] = {0, 0, S, 0, S, S, 0, S};
+        ring(&r, sq, 4);
+        wm_refine_opts o = {20, 1500, S, 7 * (int64_t)S, 3 * (int64_t)S};
+        uint32_t *tris = NULL;
+        wm_pt *extra = NULL;
+        size_t nt = 0, nx = 0;
+        wm_refine_stats st = {0, 0, 0};
+        const wm_status rc = wm_refine_triangulate(r.pts, r.start, 1, &o, &tris,
+                                                   &nt, &extra, &nx, &st, NULL);
+        size_t side = 0, off = 0;
+        for (size_t i = 0; i < nx; i++)
+        {
+            const wm_pt p = extra[i];
+            const int on = p.x == 0 || p.x == S || p.y == 0 || p.y == S;
+            const int64_t g = p.x == 0 || p.x == S ? 3 * (int64_t)S + p.y
+                                                   : 7 * (int64_t)S + p.x;
+            side += on;
+            off += on && g % 1500 != 0;
+        }
+        TAP_OK(rc == WM_OK && nt > 0, "block square: %zu triangles", nt);
+        TAP_EQ(off, 0,
+               "block square: %zu side points, all at global "
+               "multiples of 1500",
+               side);
+        /* x from 70000 to 80000: 70500 .. 79500, 7 points on each of the
+         * two sides along x; y from 30000 to 40000: 31500 .. 39000, 6 */
+        TAP_EQ(side, 2 * 7 + 2 * 6, "block square: the sides' multiples");
+        free(tris);
+        free(extra);
+        wm_rings_free(&r);
+    }
+    /* invalid input is the CDT's error */
+    {
+        wm_rings r;
+        memset(&r, 0, sizeof r);
+        static const int cw[] = {0, 0, 0, 100, 100, 0};
+        ring(&r, cw, 3);
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0};
+        uint32_t *tris = NULL;
+        wm_pt *extra = NULL;
+        size_t nt = 0, nx = 0;
+        const wm_status rc = wm_refine_triangulate(
+            r.pts, r.start, 1, &o, &tris, &nt, &extra, &nx, NULL, NULL);
+        TAP_OK(rc == WM_ERR_INVALID && !tris && !extra,
+               "a clockwise outer ring is refused");
+        wm_rings_free(&r);
+    }
+    return TAP_DONE();
+}
