@@ -403,3 +403,15 @@ def test_refined_draped_mesh(wm, scene, draped):
     ntri = sum(len(read_glb_z(fn)[3]) // 3 for fn in files)
     ds = gdal.OpenEx(out, gdal.OF_VECTOR)
     assert ntri == sum(f['triangles'] for f in ds.GetLayerByName('mesh')) > 0
+
+
+def test_raster_view_unchanged(wm, scene):
+    """The distance raster view ignores ELEVATION (and the refinement)."""
+    base = {'RIVERS': scene['path'], 'RIVERS_LAYER': 'rivers', 'WIDTH_FIELD': 'width',
+            'LAKES': scene['path'], 'LAKES_LAYER': 'lakes', 'PIXEL_SIZE': 4}
+    sums = []
+    for extra in ({}, {'ELEVATION': scene['dem'], 'MIN_ANGLE': 20}):
+        ds, cap = wm.open(dict(base, **extra), flags=gdal.OF_RASTER)
+        assert ds is not None, cap.text
+        sums.append((ds.RasterXSize, ds.RasterYSize, ds.GetRasterBand(1).Checksum()))
+    assert sums[0] == sums[1] and sums[0][2] != 0

@@ -48,3 +48,16 @@ def test_descriptor_full_feature_set(tmp_path):
 def test_connection_string(form):
     run_test_ogrsf(['WATERMESH:', '-oo', 'RIVERS=' + LI, '-oo', 'LAKES=' + LI,
                     '-oo', 'MESH_GEOMETRY=' + form])
+
+
+@pytest.mark.parametrize('form', ['MULTIPOLYGON', 'TIN', 'TRIANGLES'])
+def test_draped_and_refined(tmp_path, form):
+    """The Z layers of ELEVATION, refined (MIN_ANGLE, MAX_EDGE), pass too."""
+    dem = str(tmp_path / 'dem.tif')
+    repo = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    subprocess.run(['/usr/bin/python3', os.path.join(repo, 'tools', 'make_dem.py'), dem,
+                    '32632', '535000', '5201000', '548500', '5239000', '30'], check=True)
+    run_test_ogrsf(['WATERMESH:', '-oo', 'RIVERS=' + LI, '-oo', 'LAKES=' + LI,
+                    '-oo', 'WIDTH_FIELD=width', '-oo', 'ELEVATION=' + dem,
+                    '-oo', 'MIN_ANGLE=20', '-oo', 'MAX_EDGE=50',
+                    '-oo', 'MESH_GEOMETRY=' + form])

@@ -99,9 +99,11 @@ class WaterMeshDataset final : public GDALDataset
         return static_cast<int>(m_apoLayers.size());
     }
     OGRLayer *GetLayer(int i) override;
-    int TestCapability(const char *) override
+    int TestCapability(const char *pszCap) override
     {
-        return FALSE;
+        /* ELEVATION gives both layers Z */
+        return EQUAL(pszCap, ODsCZGeometries) && m_poScene &&
+               m_poScene->params.elevation != nullptr;
     }
     CPLErr GetGeoTransform(double *padfGT) override;
     const OGRSpatialReference *GetSpatialRef() const override
@@ -508,6 +510,8 @@ int WaterMeshLayer::TestCapability(const char *pszCap)
         return TRUE;
     if (EQUAL(pszCap, OLCStringsAsUTF8))
         return TRUE;
+    if (EQUAL(pszCap, OLCZGeometries)) /* ELEVATION */
+        return m_poDS->m_poScene->params.elevation != nullptr;
     return FALSE;
 }
 
@@ -776,6 +780,7 @@ extern "C" void GDALRegister_WATERMESH()
     poDriver->SetMetadataItem(GDAL_DMD_CONNECTION_PREFIX, "WATERMESH:");
     poDriver->SetMetadataItem(GDAL_DMD_OPENOPTIONLIST, OPEN_OPTIONS);
     poDriver->SetMetadataItem(GDAL_DCAP_VIRTUALIO, "YES");
+    poDriver->SetMetadataItem(GDAL_DCAP_Z_GEOMETRIES, "YES");
     poDriver->SetMetadataItem("WATERMESH_OPENCL", wm_cl_built() ? "YES" : "NO");
     poDriver->pfnIdentify = WaterMeshDataset::Identify;
     poDriver->pfnOpen = WaterMeshDataset::Open;
