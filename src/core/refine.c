@@ -184,10 +184,33 @@ static int on_square(const refiner *r, wm_pt a, wm_pt b)
            (a.y == b.y && (a.y == 0 || a.y == S));
 }
 
-/* Cuts the ring edges on the block square longer than max_edge at the
- * global multiples of max_edge along the side (exact lattice points on
- * the edge; both blocks sharing the side find the same). */
-static int cut_square_edges(refiner *r)
+/* Appends to out the points cutting edge a -> b (not on the block
+ * square) into equal pieces no longer than L, rounded to the lattice. */
+static int cut_evenly(refiner *r, wm_pt a, wm_pt b, double L, ibuf *out)
+{
+    const double len = sqrt(((double)b.x - a.x) * ((double)b.x - a.x) +
+                            ((double)b.y - a.y) * ((double)b.y - a.y));
+    const double k = ceil(len / L);
+    for (double m = 1; m < k; m++)
+    {
+        const wm_pt q = {(int32_t)llround(a.x + ((double)b.x - a.x) * m / k),
+                         (int32_t)llround(a.y + ((double)b.y - a.y) * m / k)};
+        int32_t iq;
+        const size_t before = r->np;
+        if (!add_point(r, q, &iq))
+            return 0;
+        if (r->np > before && !ibuf_push(out, iq))
+            return 0;
+    }
+    return 1;
+}
+
+/* Cuts the ring edges longer than max_edge: those on the block square at
+ * the global multiples of max_edge along the side (exact lattice points on
+ * the edge; both blocks sharing the side find the same), the others into
+ * equal pieces (points rounded to the lattice), so that refinement does
+ * not halve them round after round. */
+static int cut_long_edges(refiner *r)
 {
     const int64_t L = (int64_t)floor(r->o->max_edge);
     if (L < 1)
@@ -205,8 +228,13 @@ static int cut_square_edges(refiner *r)
             const int32_t ib = r->ring.a[b0 + (i + 1) % len];
             ok = ibuf_push(&out, ia);
             const wm_pt a = r->P[ia], b = r->P[ib];
-            if (!ok || !on_square(r, a, b))
+            if (!ok)
                 continue;
+            if (!on_square(r, a, b))
+            {
+                ok = cut_evenly(r, a, b, (double)L, &out);
+                continue;
+            }
             const int vertical = a.x == b.x;
             const int64_t o = vertical ? r->o->Y0 : r->o->X0;
             const int64_t ga = o + (vertical ? a.y : a.x);
@@ -238,6 +266,73 @@ static int cut_square_edges(refiner *r)
     free(out.a);
     free(ns);
     return 0;
+}
+
+static double d2(wm_pt a, wm_pt b)
+{
+    const double dx = (double)a.x - b.x, dy = (double)a.y - b.y;
+    return dx * dx + dy * dy;
+}
+
+/* With max_edge: seeds the points of a global triangular lattice of side
+ * 0.9 max_edge that lie inside a triangle of the plain CDT (r->tris) with
+ * an edge over max_edge, a third of the side or more from its edges (off
+ * the ring edges, and apart from the seeds of the triangles beside), so
+ * that most of the interior is meshed in the first round; refinement does
+ * the rest. The lattice is global: the seeds do not depend on the block
+ * or the thread. */
+static int seed_grid(refiner *r)
+{
+    const double h = floor(0.9 * r->o->max_edge);
+    const double hy = floor(h * 0.8660254037844386);
+    if (h < 4 || hy < 4)
+        return 1;
+    const double X0 = (double)r->o->X0, Y0 = (double)r->o->Y0;
+    for (size_t t = 0; t < r->ntris; t++)
+    {
+        const uint32_t *v = r->tris + 3 * t;
+        const wm_pt p[3] = {r->P[v[0]], r->P[v[1]], r->P[v[2]]};
+        double lmax = 0, len[3];
+        for (int k = 0; k < 3; k++)
+        {
+            len[k] = sqrt(d2(p[k], p[(k + 1) % 3]));
+            lmax = len[k] > lmax ? len[k] : lmax;
+        }
+        if (lmax * lmax <= r->max2)
+            continue;
+        double x0 = p[0].x, x1 = p[0].x, y0 = p[0].y, y1 = p[0].y;
+        for (int k = 1; k < 3; k++)
+        {
+            x0 = p[k].x < x0 ? p[k].x : x0;
+            x1 = p[k].x > x1 ? p[k].x : x1;
+            y0 = p[k].y < y0 ? p[k].y : y0;
+            y1 = p[k].y > y1 ? p[k].y : y1;
+        }
+        /* global rows j * hy, columns i * h (+ h / 2 on odd rows) */
+        for (double j = ceil((y0 + Y0) / hy); j * hy - Y0 <= y1; j++)
+        {
+            const double shift = fmod(fabs(j), 2.0) == 1.0 ? h / 2 : 0;
+            const double y = j * hy - Y0;
+            for (double i = ceil((x0 + X0 - shift) / h);
+                 i * h + shift - X0 <= x1; i++)
+            {
+                const wm_pt q = {(int32_t)(i * h + shift - X0), (int32_t)y};
+                int inside = 1;
+                for (int k = 0; k < 3 && inside; k++)
+                    inside = (double)wm_orient_det(p[k], p[(k + 1) % 3], q) >=
+                             len[k] * h / 3;
+                int32_t idx;
+                const size_t before = r->np;
+                if (!inside)
+                    continue;
+                if (!add_point(r, q, &idx))
+                    return 0;
+                if (r->np > before && !ibuf_push(&r->steiner, idx))
+                    return 0;
+            }
+        }
+    }
+    return 1;
 }
 
 /* Triangulates the rings and the Steiner points; indexes the result. */
@@ -281,12 +376,6 @@ static wm_status triangulate(refiner *r)
                 (int64_t)(b0 + i));
     }
     return WM_OK;
-}
-
-static double d2(wm_pt a, wm_pt b)
-{
-    const double dx = (double)a.x - b.x, dy = (double)a.y - b.y;
-    return dx * dx + dy * dy;
 }
 
 /* Triangle t's badness: 0 fine, else LONG (an edge over max_edge) and/or
@@ -687,7 +776,7 @@ wm_status wm_refine_triangulate(const wm_pt *pts, const size_t *ring_start,
     const double cap =
         16.0 * (double)n + 4096 + (o->max_edge > 0 ? 4 * area2 / r.max2 : 0);
     size_t left = 0, small_input = 0;
-    if (o->max_edge > 0 && !cut_square_edges(&r))
+    if (o->max_edge > 0 && (!cut_long_edges(&r) || !seed_grid(&r)))
         goto nomem;
     for (int round = 0; round < MAX_ROUNDS; round++)
     {
