@@ -41,7 +41,9 @@ typedef struct
     uint32_t *lslot; /* per ledge: its polygon's slot in ids + nsegs */
     size_t nledge;
     wm_cells near, rows; /* near: k < nsegs a segment, else ledge k - nsegs */
-    uint8_t *par;        /* per polygon slot: ray-cast parity (scratch) */
+    uint8_t *par;        /* per polygon slot: ray-cast parity (bit 0) and
+                            listed in toggled (bit 1); 0 between queries */
+    uint32_t *toggled;   /* the slots a query touched (scratch) */
 } index_t;
 
 static int32_t cell_of(const index_t *ix, double v)
@@ -116,6 +118,7 @@ static void index_free(index_t *ix)
     free(ix->ledge);
     free(ix->lslot);
     free(ix->par);
+    free(ix->toggled);
     wm_cells_free(&ix->near);
     wm_cells_free(&ix->rows);
 }
@@ -143,7 +146,8 @@ static wm_status index_build(index_t *ix, const wm_scene *s, const wm_drape *d,
     ix->ledge = malloc((ix->nledge + 1) * sizeof *ix->ledge);
     ix->lslot = malloc((ix->nledge + 1) * sizeof *ix->lslot);
     ix->par = calloc(ix->npolys + 1, 1);
-    if (!ix->ledge || !ix->lslot || !ix->par)
+    ix->toggled = malloc((ix->npolys + 1) * sizeof *ix->toggled);
+    if (!ix->ledge || !ix->lslot || !ix->par || !ix->toggled)
         return WM_ERR_NOMEM;
     wm_cells_reset(&ix->near, ix->side);
     wm_cells_reset(&ix->rows, ix->side);
@@ -189,23 +193,31 @@ static int32_t lake_body(index_t *ix, int64_t X, int64_t Y)
 {
     if (!ix->npolys)
         return -1;
-    size_t b, e;
+    size_t b, e, nt = 0;
     const int32_t r = cell_of(ix, (double)(Y - ix->Y0));
     wm_cells_row(&ix->rows, r, 0, 0, &b, &e);
-    memset(ix->par, 0, ix->npolys);
     for (size_t i = b; i < e; i++)
     {
         const uint32_t k = ix->rows.item[i];
-        if (wm_edge_crosses_ray(&ix->s->edges[ix->ledge[k]], X, Y))
-            ix->par[ix->lslot[k]] ^= 1;
+        if (!wm_edge_crosses_ray(&ix->s->edges[ix->ledge[k]], X, Y))
+            continue;
+        const uint32_t slot = ix->lslot[k];
+        if (!ix->par[slot]) /* first toggle: remember the slot */
+            ix->toggled[nt++] = slot;
+        ix->par[slot] ^= 1;
+        ix->par[slot] |= 2; /* bit 1: in toggled[] */
     }
     int32_t body = -1;
-    for (size_t i = 0; i < ix->npolys; i++)
-        if (ix->par[i])
+    for (size_t i = 0; i < nt; i++)
+    {
+        const uint32_t slot = ix->toggled[i];
+        if (ix->par[slot] & 1)
         {
-            const int32_t bi = ix->d->poly_body[ix->ids[ix->nsegs + i]];
+            const int32_t bi = ix->d->poly_body[ix->ids[ix->nsegs + slot]];
             body = body < 0 || bi < body ? bi : body;
         }
+        ix->par[slot] = 0;
+    }
     return body;
 }
 

@@ -38,7 +38,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define MAX_ROUNDS 256
+#define MAX_ROUNDS 100
 #define PI 3.14159265358979323846
 
 /* Floor division, b > 0. */
@@ -145,6 +145,7 @@ typedef struct
     uint8_t *split;   /* per ring position: its edge splits (size ring.n) */
     uint8_t *touched; /* per triangle: near a change of this round */
     size_t nsplit, nnew;
+    int nosplit;    /* a split broke the CDT once: split no more */
     double cos_min; /* cos(min_angle), or 2 (off) */
     double max2;    /* max_edge^2, or INFINITY */
 } refiner;
@@ -176,6 +177,20 @@ static int add_point(refiner *r, wm_pt p, int32_t *idx)
     return 1;
 }
 
+/* Whether point p lies on the block square's outline. */
+static int on_square_pt(const refiner *r, wm_pt p)
+{
+    const int32_t S = r->o->side;
+    return p.x == 0 || p.x == S || p.y == 0 || p.y == S;
+}
+
+/* The midpoint of a and b, rounded down to the lattice (apply_splits). */
+static wm_pt midpoint(wm_pt a, wm_pt b)
+{
+    return (wm_pt){(int32_t)(((int64_t)a.x + b.x) >> 1),
+                   (int32_t)(((int64_t)a.y + b.y) >> 1)};
+}
+
 /* Whether ring edge a-b lies on the block square. */
 static int on_square(const refiner *r, wm_pt a, wm_pt b)
 {
@@ -197,6 +212,8 @@ static int cut_evenly(refiner *r, wm_pt a, wm_pt b, double L, ibuf *out)
                          (int32_t)llround(a.y + ((double)b.y - a.y) * m / k)};
         int32_t iq;
         const size_t before = r->np;
+        if (on_square_pt(r, q)) /* the block across would not have it */
+            continue;
         if (!add_point(r, q, &iq))
             return 0;
         if (r->np > before && !ibuf_push(out, iq))
@@ -208,9 +225,9 @@ static int cut_evenly(refiner *r, wm_pt a, wm_pt b, double L, ibuf *out)
 /* Cuts the ring edges longer than max_edge: those on the block square at
  * the global multiples of max_edge along the side (exact lattice points on
  * the edge; both blocks sharing the side find the same), the others into
- * equal pieces (points rounded to the lattice), so that refinement does
- * not halve them round after round. */
-static int cut_long_edges(refiner *r)
+ * equal pieces (points rounded to the lattice; with `shores`), so that
+ * refinement does not halve them round after round. */
+static int cut_long_edges(refiner *r, int shores)
 {
     const int64_t L = (int64_t)floor(r->o->max_edge);
     if (L < 1)
@@ -232,7 +249,7 @@ static int cut_long_edges(refiner *r)
                 continue;
             if (!on_square(r, a, b))
             {
-                ok = cut_evenly(r, a, b, (double)L, &out);
+                ok = !shores || cut_evenly(r, a, b, (double)L, &out);
                 continue;
             }
             const int vertical = a.x == b.x;
@@ -313,8 +330,27 @@ static int seed_grid(refiner *r)
         {
             const double shift = fmod(fabs(j), 2.0) == 1.0 ? h / 2 : 0;
             const double y = j * hy - Y0;
-            for (double i = ceil((x0 + X0 - shift) / h);
-                 i * h + shift - X0 <= x1; i++)
+            /* the triangle's x range on this row (its edges crossing it) */
+            double lo = x1, hi = x0;
+            for (int k = 0; k < 3; k++)
+            {
+                const wm_pt a = p[k], b = p[(k + 1) % 3];
+                if ((a.y > y) == (b.y > y) && a.y != y)
+                    continue;
+                const double x = a.y == b.y
+                                     ? a.x
+                                     : a.x + ((double)b.x - a.x) * (y - a.y) /
+                                                 ((double)b.y - a.y);
+                lo = x < lo ? x : lo;
+                hi = x > hi ? x : hi;
+                if (a.y == b.y)
+                {
+                    lo = b.x < lo ? b.x : lo;
+                    hi = b.x > hi ? b.x : hi;
+                }
+            }
+            for (double i = ceil((lo + X0 - shift) / h);
+                 i * h + shift - X0 <= hi; i++)
             {
                 const wm_pt q = {(int32_t)(i * h + shift - X0), (int32_t)y};
                 int inside = 1;
@@ -334,6 +370,8 @@ static int seed_grid(refiner *r)
     }
     return 1;
 }
+
+static wm_status index_tris(refiner *r);
 
 /* Triangulates the rings and the Steiner points; indexes the result. */
 static wm_status triangulate(refiner *r)
@@ -360,6 +398,14 @@ static wm_status triangulate(refiner *r)
     free(r->tris);
     r->tris = t;
     r->ntris = nt;
+    return index_tris(r);
+}
+
+/* Indexes r->tris (directed edges) and the ring edges. */
+static wm_status index_tris(refiner *r)
+{
+    const uint32_t *t = r->tris;
+    const size_t nt = r->ntris;
     if (!map_init(&r->half, 3 * nt) || !map_init(&r->redge, r->ring.n))
         return wm_fail(r->ctx, WM_ERR_NOMEM, "refine: out of memory");
     for (size_t h = 0; h < 3 * nt; h++)
@@ -442,7 +488,11 @@ static int want_split(refiner *r, int64_t k)
     const wm_pt a = r->P[r->ring.a[q0]];
     const wm_pt b =
         r->P[r->ring.a[r->rstart[q] + (q0 - r->rstart[q] + 1) % len]];
-    if (on_square(r, a, b) || d2(a, b) < 4)
+    /* a split must add a vertex, and never one on the block square: the
+     * block across would not have it */
+    const wm_pt m = midpoint(a, b);
+    if (r->nosplit || on_square(r, a, b) || wm_pt_eq(m, a) || wm_pt_eq(m, b) ||
+        on_square_pt(r, m))
         return 0;
     r->nsplit += !r->split[q0];
     r->split[q0] = 1;
@@ -477,6 +527,21 @@ static int64_t encroached(const refiner *r, size_t t, wm_pt c)
                 return pos;
         }
     return -1;
+}
+
+/* Whether c lies on a ring edge of triangle t (exact): a point there
+ * would break the CDT's contract. c lies in t's closure. */
+static int on_ring_edge(const refiner *r, size_t t, wm_pt c)
+{
+    const uint32_t *v = r->tris + 3 * t;
+    for (int i = 0; i < 3; i++)
+    {
+        const int32_t a = (int32_t)v[i], b = (int32_t)v[(i + 1) % 3];
+        if (wm_orient(r->P[a], r->P[b], c) == 0 &&
+            map_get(&r->redge, undirected(a, b)) >= 0)
+            return 1;
+    }
+    return 0;
 }
 
 /* Walks from triangle t towards c: the triangle holding c (*hold), or the
@@ -601,13 +666,15 @@ static int cure(refiner *r, size_t t, int why)
     if (!(why & LONG) || !interior_midpoint(r, t, &c) ||
         !walk(r, t, c, &hold, &pos) || hold == SIZE_MAX)
         return 0;
-    return r->touched[hold] ? 2 : add_steiner(r, t, hold, c);
+    if (r->touched[hold])
+        return 2;
+    return on_ring_edge(r, hold, c) ? 0 : add_steiner(r, t, hold, c);
 }
 
 /* One round: rates every triangle, collects circumcentres and splits. */
-static int rate(refiner *r, size_t *left, size_t *small_input, size_t *waiting)
+static int rate(refiner *r, size_t *left, size_t *small_input, size_t *pending)
 {
-    *left = *small_input = *waiting = 0;
+    *left = *small_input = *pending = 0;
     for (size_t t = 0; t < r->ntris; t++)
     {
         int input;
@@ -619,7 +686,7 @@ static int rate(refiner *r, size_t *left, size_t *small_input, size_t *waiting)
         if (c < 0)
             return 0;
         *left += c == 0;
-        *waiting += c == 2;
+        *pending += c != 0; /* being cured, or waiting for the next round */
     }
     return 1;
 }
@@ -629,7 +696,8 @@ static int apply_splits(refiner *r)
 {
     ibuf out = {NULL, 0, 0};
     size_t *ns = malloc((r->nrings + 1) * sizeof *ns);
-    uint8_t *was = calloc(r->np + 1, 1); /* ring points before the splits */
+    const size_t np0 = r->np;
+    uint8_t *was = calloc(np0 + 1, 1); /* ring points before the splits */
     int ok = ns != NULL && was != NULL;
     for (size_t i = 0; ok && i < r->ring.n; i++)
         was[r->ring.a[i]] = 1;
@@ -644,14 +712,13 @@ static int apply_splits(refiner *r)
                 continue;
             const wm_pt a = r->P[r->ring.a[b0 + i]];
             const wm_pt b = r->P[r->ring.a[b0 + (i + 1) % len]];
-            const wm_pt m = {(int32_t)(((int64_t)a.x + b.x) >> 1),
-                             (int32_t)(((int64_t)a.y + b.y) >> 1)};
+            const wm_pt m = midpoint(a, b);
             int32_t im;
             const size_t before = r->np;
             ok = add_point(r, m, &im);
             /* a new point, or a Steiner point the rounding met; never a
              * ring's vertex */
-            if (ok && (r->np > before || !was[im]))
+            if (ok && (r->np > before || ((size_t)im < np0 && !was[im])))
                 ok = ibuf_push(&out, im);
         }
     }
@@ -699,8 +766,9 @@ static void refiner_free(refiner *r)
     free(r->touched);
 }
 
-/* Copies the current triangulation and the added points into the
- * result (a good triangulation: the result so far). 0: out of memory. */
+/* Copies the current triangulation and the added points it uses into the
+ * result (a good triangulation: the result so far), the points renumbered
+ * in their order. 0: out of memory. */
 static int snapshot(const refiner *r, size_t n, uint32_t **tris, size_t *ntris,
                     wm_pt **extra, size_t *nextra)
 {
@@ -708,28 +776,164 @@ static int snapshot(const refiner *r, size_t n, uint32_t **tris, size_t *ntris,
     free(*extra);
     *tris = malloc((3 * r->ntris + 1) * sizeof **tris);
     *extra = malloc((r->np - n + 1) * sizeof **extra);
-    if (!*tris || !*extra)
+    uint32_t *to = calloc(r->np - n + 1, sizeof *to); /* 0: unused */
+    if (!*tris || !*extra || !to)
+    {
+        free(to);
         return 0;
-    memcpy(*tris, r->tris, 3 * r->ntris * sizeof **tris);
+    }
+    for (size_t i = 0; i < 3 * r->ntris; i++)
+        if (r->tris[i] >= n)
+            to[r->tris[i] - n] = 1;
+    size_t k = 0;
+    for (size_t i = 0; i < r->np - n; i++)
+        if (to[i])
+        {
+            (*extra)[k] = r->P[n + i];
+            to[i] = (uint32_t)(n + k++);
+        }
+    for (size_t i = 0; i < 3 * r->ntris; i++)
+        (*tris)[i] = r->tris[i] < n ? r->tris[i] : to[r->tris[i] - n];
     *ntris = r->ntris;
-    memcpy(*extra, r->P + n, (r->np - n) * sizeof **extra);
-    *nextra = r->np - n;
+    *nextra = k;
+    free(to);
     return 1;
 }
 
-/* Saves the current triangulation and points as the result. */
-static wm_status keep(refiner *r, size_t n, uint32_t **tris, size_t *ntris,
-                      wm_pt **extra, size_t *nextra)
+/* The rings and the Steiner count before a round's changes. */
+typedef struct
 {
-    *extra = malloc((r->np - n + 1) * sizeof **extra);
-    if (!*extra)
-        return wm_fail(r->ctx, WM_ERR_NOMEM, "refine: out of memory");
-    memcpy(*extra, r->P + n, (r->np - n) * sizeof **extra);
-    *nextra = r->np - n;
-    *tris = r->tris;
-    *ntris = r->ntris;
-    r->tris = NULL;
-    return WM_OK;
+    ibuf ring;
+    size_t *rstart;
+    size_t nsteiner;
+} saved;
+
+static int save(const refiner *r, saved *s)
+{
+    s->ring.n = 0;
+    for (size_t i = 0; i < r->ring.n; i++)
+        if (!ibuf_push(&s->ring, r->ring.a[i]))
+            return 0;
+    free(s->rstart);
+    s->rstart = malloc((r->nrings + 1) * sizeof *s->rstart);
+    if (!s->rstart)
+        return 0;
+    memcpy(s->rstart, r->rstart, (r->nrings + 1) * sizeof *s->rstart);
+    s->nsteiner = r->steiner.n;
+    return 1;
+}
+
+/* Puts the saved rings back (and the Steiner points too with all). */
+static int restore(refiner *r, const saved *s, int all)
+{
+    r->ring.n = 0;
+    for (size_t i = 0; i < s->ring.n; i++)
+        if (!ibuf_push(&r->ring, s->ring.a[i]))
+            return 0;
+    memcpy(r->rstart, s->rstart, (r->nrings + 1) * sizeof *r->rstart);
+    if (all)
+        r->steiner.n = s->nsteiner;
+    return 1;
+}
+
+/* Counts the bad triangles of the current triangulation: at input angles
+ * and others. */
+static void count_bad(const refiner *r, size_t *left, size_t *small_input)
+{
+    *left = *small_input = 0;
+    for (size_t t = 0; t < r->ntris; t++)
+    {
+        int input;
+        *left += bad(r, t, &input) != 0;
+        *small_input += input;
+    }
+}
+
+/* Refinement rounds from the current rings and Steiner points. WM_OK with
+ * the result set; WM_ERR_INVALID when the CDT refuses the first round
+ * (nothing set); WM_ERR_NOMEM. When a later round's changes break the CDT,
+ * the round is retried without its splits (and splits stop), then the last
+ * good triangulation is kept. *left counts the bad triangles of the result
+ * but those at input angles (*small_input). */
+static wm_status rounds(refiner *r, size_t n, double cap, uint32_t **tris,
+                        size_t *ntris, wm_pt **extra, size_t *nextra,
+                        size_t *left, size_t *small_input)
+{
+    saved sv;
+    memset(&sv, 0, sizeof sv);
+    wm_status st = WM_OK;
+    int retried = 0;
+    for (int round = 0; round < MAX_ROUNDS; round++)
+    {
+        st = triangulate(r);
+        if (st != WM_OK && st != WM_ERR_NOMEM && round > 0)
+        {
+            /* the round's splits first (they move the shore), then all */
+            const int all = retried || r->nosplit;
+            if (!restore(r, &sv, all))
+                st = WM_ERR_NOMEM;
+            else if (!all)
+            {
+                r->nosplit = retried = 1;
+                round--;
+                continue;
+            }
+            else /* the last good triangulation and its maps stay */
+            {
+                count_bad(r, left, small_input);
+                st = WM_OK;
+                break;
+            }
+        }
+        if (st != WM_OK)
+            break;
+        retried = 0;
+        if (!snapshot(r, n, tris, ntris, extra, nextra) || !save(r, &sv))
+        {
+            st = WM_ERR_NOMEM;
+            break;
+        }
+        free(r->split);
+        free(r->touched);
+        r->split = calloc(r->ring.n + 1, 1);
+        r->touched = calloc(r->ntris + 1, 1);
+        r->nsplit = r->nnew = 0;
+        size_t pending = 0;
+        if (!r->split || !r->touched || !rate(r, left, small_input, &pending))
+        {
+            st = WM_ERR_NOMEM;
+            break;
+        }
+        if (r->nsplit == 0 && r->nnew == 0)
+            break;
+        if ((double)r->np > cap || round == MAX_ROUNDS - 1 ||
+            wm_cancelled(r->ctx))
+        {
+            *left += pending; /* stopped with these still bad */
+            break;
+        }
+        if (r->nsplit && !apply_splits(r))
+        {
+            st = WM_ERR_NOMEM;
+            break;
+        }
+    }
+    free(sv.ring.a);
+    free(sv.rstart);
+    return st;
+}
+
+/* Starts again from the input rings, without Steiner points. */
+static int reset(refiner *r, const size_t *ring_start, size_t n)
+{
+    r->ring.n = 0;
+    for (size_t i = 0; i < n; i++)
+        if (!ibuf_push(&r->ring, (int32_t)i))
+            return 0;
+    memcpy(r->rstart, ring_start, (r->nrings + 1) * sizeof *r->rstart);
+    r->steiner.n = 0;
+    r->nosplit = 0;
+    return 1;
 }
 
 wm_status wm_refine_triangulate(const wm_pt *pts, const size_t *ring_start,
@@ -776,36 +980,34 @@ wm_status wm_refine_triangulate(const wm_pt *pts, const size_t *ring_start,
     const double cap =
         16.0 * (double)n + 4096 + (o->max_edge > 0 ? 4 * area2 / r.max2 : 0);
     size_t left = 0, small_input = 0;
-    if (o->max_edge > 0 && (!cut_long_edges(&r) || !seed_grid(&r)))
-        goto nomem;
-    for (int round = 0; round < MAX_ROUNDS; round++)
+    /* with MAX_EDGE, long edges cut and the interior seeded first; if the
+     * CDT refuses that (a rounded cut too close to another edge), the exact
+     * cuts of the block square's edges alone, which the block across makes
+     * too; if even that fails, the plain CDT */
+    for (int prep = o->max_edge > 0 ? 2 : 1; prep >= 0; prep--)
     {
-        st = triangulate(&r);
-        if (st == WM_ERR_NOMEM)
-            goto done;
-        if (st != WM_OK)
-            break; /* keep the last good triangulation (r.tris) */
-        if (!snapshot(&r, n, tris, ntris, extra, nextra))
+        if (prep < 2 && !reset(&r, ring_start, n))
             goto nomem;
-        free(r.split);
-        free(r.touched);
-        r.split = calloc(r.ring.n + 1, 1);
-        r.touched = calloc(r.ntris + 1, 1);
-        r.nsplit = r.nnew = 0;
-        size_t waiting = 0;
-        if (!r.split || !r.touched || !rate(&r, &left, &small_input, &waiting))
+        if ((prep == 2 && (!cut_long_edges(&r, 1) || !seed_grid(&r))) ||
+            (prep == 1 && o->max_edge > 0 && !cut_long_edges(&r, 0)))
             goto nomem;
-        if ((r.nsplit == 0 && r.nnew == 0) || (double)r.np > cap ||
-            wm_cancelled(ctx))
+        if (prep == 0) /* the plain CDT: r.tris is still the first one */
+        {
+            if (!reset(&r, ring_start, n) || index_tris(&r) != WM_OK ||
+                !snapshot(&r, n, tris, ntris, extra, nextra))
+                goto nomem;
+            count_bad(&r, &left, &small_input);
             break;
-        if (r.nsplit && !apply_splits(&r))
+        }
+        st =
+            rounds(&r, n, cap, tris, ntris, extra, nextra, &left, &small_input);
+        if (st == WM_ERR_NOMEM)
             goto nomem;
+        if (st == WM_OK)
+            break;
     }
-    if (!*tris) /* the first refined round failed: the plain CDT */
-        st = keep(&r, n, tris, ntris, extra, nextra);
-    else
-        st = WM_OK;
-    if (stats && st == WM_OK)
+    st = WM_OK;
+    if (stats)
     {
         stats->steiner += *nextra;
         stats->small_input += small_input;

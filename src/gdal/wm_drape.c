@@ -280,13 +280,14 @@ typedef struct
     size_t n, cap;
 } samples;
 
-/* Samples the shore of polygon p (those of body `body` but p left out)
- * every `step` metres into *out. */
-static void shore_samples(const WMScene *s, dem_t *dem, const WMDrape *d,
-                          size_t p, int alone, double step, samples *out)
+/* Samples the shore of polygon p every `step` metres into *out, leaving
+ * out the points inside the other polygons of its body (mates[0 .. nmates),
+ * p among them). */
+static void shore_samples(const WMScene *s, dem_t *dem, size_t p,
+                          const size_t *mates, size_t nmates, double step,
+                          samples *out)
 {
     const wm_scene *c = &s->core;
-    const int32_t body = d->poly_body[p];
     for (size_t e = c->poly_start[p]; e < c->poly_start[p + 1]; e++)
     {
         const wm_lake_edge *g = &c->edges[e];
@@ -299,9 +300,9 @@ static void shore_samples(const WMScene *s, dem_t *dem, const WMDrape *d,
             const double X = (double)g->ax + t * (double)(g->bx - g->ax);
             const double Y = (double)g->ay + t * (double)(g->by - g->ay);
             int other = 0;
-            for (size_t q = 0; q < c->npolys && !other && !alone; q++)
-                other = q != p && d->poly_body[q] == body &&
-                        in_poly(c, q, llround(X), llround(Y));
+            for (size_t q = 0; q < nmates && !other; q++)
+                other = mates[q] != p &&
+                        in_poly(c, mates[q], llround(X), llround(Y));
             if (other)
                 continue;
             const double z = dem_at(dem, X * s->unit, Y * s->unit);
@@ -321,13 +322,21 @@ static int lake_levels(const WMScene *s, dem_t *dem, WMDrape *d, double step)
 {
     const wm_scene *c = &s->core;
     samples *per = CPLCalloc(d->nbodies + 1, sizeof *per);
-    size_t *count = CPLCalloc(d->nbodies + 1, sizeof *count);
+    /* the polygons of each body, by body */
+    size_t *start = CPLCalloc(d->nbodies + 1, sizeof *start);
+    size_t *polys = CPLMalloc((c->npolys + 1) * sizeof *polys);
     for (size_t p = 0; p < c->npolys; p++)
-        count[d->poly_body[p]]++;
-    for (size_t p = 0; p < c->npolys; p++)
-        shore_samples(s, dem, d, p, count[d->poly_body[p]] == 1, step,
-                      &per[d->poly_body[p]]);
-    CPLFree(count);
+        start[d->poly_body[p] + 1]++;
+    size_t *cur = wm_csr_begin(start, d->nbodies);
+    for (size_t p = 0; cur && p < c->npolys; p++)
+        polys[cur[d->poly_body[p]]++] = p;
+    for (size_t b = 0; cur && b < d->nbodies; b++)
+        for (size_t k = start[b]; k < start[b + 1]; k++)
+            shore_samples(s, dem, polys[k], polys + start[b],
+                          start[b + 1] - start[b], step, &per[b]);
+    free(cur);
+    CPLFree(start);
+    CPLFree(polys);
     int ok = TRUE;
     for (size_t b = 0; b < d->nbodies; b++)
     {
@@ -443,19 +452,40 @@ static int fill_gaps(const WMScene *s, network *nw, const char *path)
                     lv[to] = lv[from];
             }
     }
-    for (int changed = 1; changed;)
+    /* then breadth first from the valued nodes over the network */
+    const size_t n = nw->n, m = s->core.nsegs;
+    size_t *nb_start = CPLCalloc(n + 1, sizeof(size_t));
+    size_t *nb = CPLMalloc((2 * m + 1) * sizeof(size_t));
+    size_t *queue = CPLMalloc((n + 1) * sizeof(size_t));
+    for (size_t i = 0; i < m; i++)
     {
-        changed = 0;
-        for (size_t i = 0; i < s->core.nsegs; i++)
-        {
-            const size_t a = nw->a[i], b = nw->b[i];
-            if (isnan(lv[a]) != isnan(lv[b]))
-            {
-                lv[isnan(lv[a]) ? a : b] = lv[isnan(lv[a]) ? b : a];
-                changed = 1;
-            }
-        }
+        nb_start[nw->a[i] + 1]++;
+        nb_start[nw->b[i] + 1]++;
     }
+    size_t *cur = wm_csr_begin(nb_start, n);
+    for (size_t i = 0; cur && i < m; i++)
+    {
+        nb[cur[nw->a[i]]++] = nw->b[i];
+        nb[cur[nw->b[i]]++] = nw->a[i];
+    }
+    size_t qh = 0, qt = 0;
+    for (size_t i = 0; cur && i < n; i++)
+        if (!isnan(lv[i]))
+            queue[qt++] = i;
+    while (qh < qt)
+    {
+        const size_t u = queue[qh++];
+        for (size_t k = nb_start[u]; k < nb_start[u + 1]; k++)
+            if (isnan(lv[nb[k]]))
+            {
+                lv[nb[k]] = lv[u];
+                queue[qt++] = nb[k];
+            }
+    }
+    free(cur);
+    CPLFree(nb_start);
+    CPLFree(nb);
+    CPLFree(queue);
     for (size_t i = 0; i < nw->n; i++)
         if (isnan(lv[i]))
         {
@@ -500,24 +530,73 @@ static void network_edges(const WMScene *s, network *nw, const uint8_t *rev)
     free(uc);
 }
 
-/* Propagates over the CSR lists (start, next) from every node: a node
- * not pinned takes its neighbour u's level where lower (carve, down the
- * flow) or higher (fill, up the flow) than its own. */
+/* A binary heap of (key, node), smallest key on top. */
+typedef struct
+{
+    double *key;
+    size_t *node;
+    size_t n;
+} heap;
+
+static void heap_push(heap *h, double key, size_t node)
+{
+    size_t i = h->n++;
+    while (i > 0 && h->key[(i - 1) / 2] > key)
+    {
+        h->key[i] = h->key[(i - 1) / 2];
+        h->node[i] = h->node[(i - 1) / 2];
+        i = (i - 1) / 2;
+    }
+    h->key[i] = key;
+    h->node[i] = node;
+}
+
+static void heap_pop(heap *h, double *key, size_t *node)
+{
+    *key = h->key[0];
+    *node = h->node[0];
+    const double k = h->key[--h->n];
+    const size_t v = h->node[h->n];
+    size_t i = 0;
+    for (;;)
+    {
+        size_t c = 2 * i + 1;
+        if (c >= h->n)
+            break;
+        if (c + 1 < h->n && h->key[c + 1] < h->key[c])
+            c++;
+        if (h->key[c] >= k)
+            break;
+        h->key[i] = h->key[c];
+        h->node[i] = h->node[c];
+        i = c;
+    }
+    h->key[i] = k;
+    h->node[i] = v;
+}
+
+/* Propagates over the CSR lists (start, next): a node not pinned takes a
+ * neighbour u's level where lower (carve, down the flow) or higher (fill,
+ * up the flow) than its own. Nodes are settled in order of level, lowest
+ * first when carving, highest first when filling (as Dijkstra's
+ * algorithm): a node's level moves at most once per neighbour settled
+ * before it, so the cost is O(edges log nodes) whatever the network. */
 static void propagate(network *nw, const size_t *start, const size_t *next,
                       int fill)
 {
-    size_t *stack = CPLMalloc((nw->n + 1) * sizeof *stack);
-    uint8_t *queued = CPLMalloc(nw->n + 1);
-    size_t top = 0;
-    for (size_t i = nw->n; i-- > 0;)
+    const size_t m = start[nw->n];
+    heap h = {CPLMalloc((nw->n + m + 1) * sizeof(double)),
+              CPLMalloc((nw->n + m + 1) * sizeof(size_t)), 0};
+    const double sign = fill ? -1.0 : 1.0;
+    for (size_t i = 0; i < nw->n; i++)
+        heap_push(&h, sign * nw->level[i], i);
+    while (h.n)
     {
-        stack[top++] = i;
-        queued[i] = 1;
-    }
-    while (top)
-    {
-        const size_t u = stack[--top];
-        queued[u] = 0;
+        double key;
+        size_t u;
+        heap_pop(&h, &key, &u);
+        if (key != sign * nw->level[u])
+            continue; /* a stale entry: u moved since */
         for (size_t k = start[u]; k < start[u + 1]; k++)
         {
             const size_t v = next[k];
@@ -526,15 +605,11 @@ static void propagate(network *nw, const size_t *start, const size_t *next,
             if (nw->pin[v] || !move)
                 continue;
             nw->level[v] = nw->level[u];
-            if (!queued[v])
-            {
-                stack[top++] = v;
-                queued[v] = 1;
-            }
+            heap_push(&h, sign * nw->level[v], v);
         }
     }
-    CPLFree(stack);
-    CPLFree(queued);
+    CPLFree(h.key);
+    CPLFree(h.node);
 }
 
 static void network_free(network *nw)

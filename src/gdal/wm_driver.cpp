@@ -232,6 +232,8 @@ CPLErr WaterMeshDataset::GetGeoTransform(double *gt)
 static size_t result_bytes(const wm_block_result *r)
 {
     return sizeof *r + (r->rings.pts_cap + r->nxpts) * sizeof(wm_pt) +
+           (r->z ? wm_block_npoints(r) * sizeof(double) : 0) +
+           (r->poly_body ? r->npolys * sizeof(int32_t) : 0) +
            r->rings.start_cap * sizeof(size_t) +
            2 * (r->npolys + 1) * sizeof(size_t) +
            (r->poly_tri ? r->poly_tri[r->npolys] : 0) * 3 * sizeof(uint32_t);

@@ -134,7 +134,10 @@ static void *worker(void *arg)
             const double t0 = wm_now();
             st = wm_drape_block(&r->s->core, &r->s->drape->core, &res);
             if (st != WM_OK)
+            {
                 wm_fail(&ctx, st, "out of memory draping the block");
+                wm_block_result_free(&res); /* failed slots are not freed */
+            }
             res.seconds[WM_STAGE_TRIANGULATE] += wm_now() - t0;
         }
         pthread_mutex_lock(&r->mu);
