@@ -372,16 +372,28 @@ def test_glb_heights_and_normals(wm, scene, draped):
     for x, y, z, fi in pts:
         heights[(round(x, 2), round(y, 2))] = z
     ntri = 0
+    normal_at = {}
     for b in index['blocks']:
         doc, pos, nrm, idx = read_glb_z(os.path.join(out, b['file']))
         ntri += len(idx) // 3
         x0, y0 = b['origin']
         for p_, n in zip(pos, nrm):
             assert abs(math.sqrt(sum(c * c for c in n)) - 1) < 1e-5 and n[1] > 0
-            z = heights[(round(x0 + p_[0], 2), round(y0 - p_[2], 2))]
-            assert abs(p_[1] - z) < 1e-3
+            key = (round(x0 + p_[0], 2), round(y0 - p_[2], 2))
+            assert abs(p_[1] - heights[key]) < 1e-3
+            normal_at.setdefault(key, set()).add(tuple(round(c, 6) for c in n))
     ds = gdal.OpenEx(draped, gdal.OF_VECTOR)
     assert ntri == sum(f['triangles'] for f in ds.GetLayerByName('mesh')) > 0
+    # normals are a pure function of position: a vertex on a block side
+    # has one normal in both blocks; lakes point straight up; sloping
+    # rivers tilt them, along their axis
+    assert all(len(v) == 1 for v in normal_at.values())
+    shared = [k for k in normal_at if k[0] % BLOCK == 0 or k[1] % BLOCK == 0]
+    assert len(shared) > 10
+    lake = [next(iter(normal_at[k])) for k in normal_at if owner(*k) in LAKES]
+    assert lake and all(n == (0.0, 1.0, 0.0) for n in lake)
+    river = [next(iter(normal_at[k])) for k in normal_at if owner(*k) in LINES]
+    assert any(n[1] < 1 - 1e-9 for n in river)
 
 
 def test_refined_draped_mesh(wm, scene, draped):

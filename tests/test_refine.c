@@ -275,6 +275,44 @@ int main(void)
         free(extra);
         wm_rings_free(&r);
     }
+    /* shore edges ending on the block square (x = 0): refinement never puts
+     * a point on the square but the global multiples of MAX_EDGE */
+    {
+        uint64_t s = 11;
+        size_t bad_side = 0, fail = 0;
+        for (int k = 0; k < 300; k++)
+        {
+            s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+            const int W = 2000 + (int)((s >> 33) % 20000);
+            const int H = 3000 + (int)((s >> 13) % 20000);
+            const int y0 = 1 + (int)((s >> 43) % (uint64_t)(H - 2));
+            const int dx = 1 + k % 3;
+            wm_rings r;
+            memset(&r, 0, sizeof r);
+            const int xy[] = {0, 0, W, 0, W, H, dx, H, 0, y0};
+            ring(&r, xy, 5);
+            const wm_refine_opts o = {20, k % 2 ? 900.0 : 0.0, 1 << 20, 0, 0};
+            uint32_t *tris = NULL;
+            wm_pt *extra = NULL;
+            size_t nt = 0, nx = 0;
+            fail += wm_refine_triangulate(r.pts, r.start, 1, &o, &tris, &nt,
+                                          &extra, &nx, NULL, NULL) != WM_OK;
+            for (size_t i = 0; i < nx; i++)
+            {
+                const wm_pt p = extra[i];
+                const int32_t v = p.x == 0 ? p.y : (p.y == 0 ? p.x : -1);
+                if (v >= 0 && (o.max_edge == 0 || v % 900 != 0))
+                    bad_side++;
+            }
+            free(tris);
+            free(extra);
+            wm_rings_free(&r);
+        }
+        TAP_EQ(fail, 0, "300 polygons touching the square: refined");
+        TAP_EQ(bad_side, 0,
+               "300 polygons touching the square: no point on "
+               "it but the multiples of MAX_EDGE");
+    }
     /* invalid input is the CDT's error */
     {
         wm_rings r;

@@ -40,6 +40,7 @@ void wm_block_result_free(wm_block_result *res)
     free(res->tris);
     free(res->xpts);
     free(res->z);
+    free(res->zgrad);
     free(res->poly_body);
     memset(res, 0, sizeof *res);
 }

@@ -68,6 +68,8 @@ extern "C"
         double *z;          /**< per point of rings, then of xpts: its
                                  height, or NULL
                                  without ELEVATION (owned; drape.h) */
+        double *zgrad;      /**< per point: the height's gradient (dz/dx, dz/dy
+                                 per lattice unit), or NULL (owned) */
         int32_t *poly_body; /**< per polygon: a lake body it holds, or -1;
                                  NULL without ELEVATION (owned) */
         double seconds[WM_STAGE_COUNT];

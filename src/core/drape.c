@@ -233,11 +233,47 @@ static double seg_d2(double px, double py, double abx, double aby, double *t)
     return dx * dx + dy * dy;
 }
 
+/* A point's height, its gradient (per lattice unit) and its lake body. */
+typedef struct
+{
+    double z, gx, gy;
+    int32_t body;
+} height_t;
+
+/* Height of a point at parameter t of river segment g (index i): its
+ * levels interpolated through the knee; the gradient runs along the axis
+ * (level bank to bank), 0 beyond the ends (the caps). */
+static height_t on_segment(const wm_drape *d, const wm_river_seg *g, uint32_t i,
+                           double t)
+{
+    const double tk = d->tk[i], zk = d->zk[i];
+    height_t h = {0, 0, 0, -1};
+    double dzdt;
+    if (t <= tk)
+    {
+        h.z = tk > 0 ? d->za[i] + t / tk * (zk - d->za[i]) : zk;
+        dzdt = tk > 0 ? (zk - d->za[i]) / tk : 0;
+    }
+    else
+    {
+        h.z = zk + (t - tk) / (1 - tk) * (d->zb[i] - zk);
+        dzdt = (d->zb[i] - zk) / (1 - tk);
+    }
+    const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
+    const double len2 = abx * abx + aby * aby;
+    if (t > 0 && t < 1 && len2 > 0)
+    {
+        h.gx = dzdt * abx / len2;
+        h.gy = dzdt * aby / len2;
+    }
+    return h;
+}
+
 /* The nearest item of the block to global (X, Y) among k in [b, e) of
- * `near` (all items when items is NULL); its height into *z and, for a
- * lake, its body into *body. Returns 0 when there is none. */
+ * `near` (all items when items is NULL) and the height it gives into *h.
+ * Returns 0 when there is none. */
 static int nearest(const index_t *ix, int64_t X, int64_t Y,
-                   const uint32_t *items, size_t n, double *z, int32_t *body)
+                   const uint32_t *items, size_t n, height_t *h)
 {
     const wm_scene *s = ix->s;
     double best = INFINITY, bt = 0;
@@ -282,40 +318,32 @@ static int nearest(const index_t *ix, int64_t X, int64_t Y,
     {
         /* the polygon holding edge bglob */
         const size_t p = wm_run_of(ix->s->poly_start, ix->s->npolys, bglob);
-        *body = ix->d->poly_body[p];
-        *z = ix->d->body_level[*body];
+        h->body = ix->d->poly_body[p];
+        h->z = ix->d->body_level[h->body];
+        h->gx = h->gy = 0;
     }
     else
-    {
-        const wm_drape *d = ix->d;
-        const double tk = d->tk[bglob], zk = d->zk[bglob];
-        if (bt <= tk)
-            *z = tk > 0 ? d->za[bglob] + bt / tk * (zk - d->za[bglob]) : zk;
-        else
-            *z = zk + (bt - tk) / (1 - tk) * (d->zb[bglob] - zk);
-        *body = -1;
-    }
+        *h = on_segment(ix->d, &s->segs[bglob], bglob, bt);
     return 1;
 }
 
-/* Height and body of block-local point p. */
-static void height(index_t *ix, wm_pt p, double *z, int32_t *body)
+/* Height, gradient and body of block-local point p. */
+static height_t height(index_t *ix, wm_pt p)
 {
     const int64_t X = ix->X0 + p.x, Y = ix->Y0 + p.y;
-    *body = lake_body(ix, X, Y);
-    if (*body >= 0)
+    height_t h = {0, 0, 0, lake_body(ix, X, Y)};
+    if (h.body >= 0)
     {
-        *z = ix->d->body_level[*body];
-        return;
+        h.z = ix->d->body_level[h.body]; /* flat */
+        return h;
     }
     size_t b = 0, e = 0;
     const int32_t c = cell_of(ix, (double)p.x), r = cell_of(ix, (double)p.y);
     if (ix->near.nocc)
         wm_cells_row(&ix->near, r, c, c, &b, &e);
-    if (nearest(ix, X, Y, ix->near.item + b, e - b, z, body))
-        return;
-    if (!nearest(ix, X, Y, NULL, ix->nsegs + ix->nledge, z, body))
-        *z = 0; /* no item at all: an empty block has no vertex */
+    if (!nearest(ix, X, Y, ix->near.item + b, e - b, &h))
+        nearest(ix, X, Y, NULL, ix->nsegs + ix->nledge, &h);
+    return h; /* (no item at all: an empty block has no vertex) */
 }
 
 wm_status wm_drape_block(const wm_scene *s, const wm_drape *d,
@@ -323,39 +351,40 @@ wm_status wm_drape_block(const wm_scene *s, const wm_drape *d,
 {
     index_t ix;
     memset(&ix, 0, sizeof ix);
-    double *z = calloc(wm_block_npoints(res) + 1, sizeof *z);
+    const size_t np = wm_block_npoints(res);
+    double *z = calloc(np + 1, sizeof *z);
+    double *g = calloc(2 * np + 1, sizeof *g);
     int32_t *pb = malloc((res->npolys + 1) * sizeof *pb);
     wm_status st = WM_ERR_NOMEM;
-    if (!z || !pb || index_build(&ix, s, d, res->bx, res->by) != WM_OK)
+    if (!z || !g || !pb || index_build(&ix, s, d, res->bx, res->by) != WM_OK)
         goto done;
     for (size_t p = 0; p < res->npolys; p++)
-    {
         pb[p] = -1;
-        const size_t a = res->rings.start[res->poly_ring[p]];
-        const size_t b = res->rings.start[res->poly_ring[p + 1]];
-        for (size_t k = a; k < b; k++)
-        {
-            int32_t body;
-            height(&ix, res->rings.pts[k], &z[k], &body);
-            if (body >= 0 && (pb[p] < 0 || body < pb[p]))
-                pb[p] = body;
-        }
-    }
-    for (size_t k = 0; k < res->nxpts; k++) /* Steiner points */
+    for (size_t k = 0; k < np; k++) /* ring points, then Steiner points */
     {
-        int32_t body;
-        height(&ix, res->xpts[k], &z[res->rings.npts + k], &body);
+        const height_t h = height(&ix, wm_block_point(res, k));
+        z[k] = h.z;
+        g[2 * k] = h.gx;
+        g[2 * k + 1] = h.gy;
+        if (h.body < 0 || k >= res->rings.npts)
+            continue;
+        const size_t p = wm_run_of(res->rings.start, res->rings.nrings, k);
+        const size_t poly = wm_run_of(res->poly_ring, res->npolys, p);
+        pb[poly] = pb[poly] < 0 || h.body < pb[poly] ? h.body : pb[poly];
     }
     free(res->z);
+    free(res->zgrad);
     free(res->poly_body);
     res->z = z;
+    res->zgrad = g;
     res->poly_body = pb;
-    z = NULL;
+    z = g = NULL;
     pb = NULL;
     st = WM_OK;
 done:
     index_free(&ix);
     free(z);
+    free(g);
     free(pb);
     return st;
 }

@@ -30,7 +30,8 @@ extern "C"
 
     /**
      * Sets res->z (one height per point of res->rings, then of res->xpts,
-     * owned by res) and
+     * owned by res), res->zgrad (its gradient: 0 in a lake, along the axis
+     * in a river, so a pure function of position too) and
      * res->poly_body (per polygon: the lowest body whose level one of its
      * points took, or -1).
      *

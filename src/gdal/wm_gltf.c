@@ -5,8 +5,8 @@
  * A file is the 12-byte header, a JSON chunk and a BIN chunk (glTF 2.0,
  * "GLB file format specification"). One mesh, one primitive of
  * triangles: POSITION (float32 VEC3, with its min and max), with
- * ELEVATION NORMAL (float32 unit VEC3, area-weighted over the vertex's
- * triangles) and y the vertex's height, and uint32 indices, in a buffer
+ * ELEVATION NORMAL (float32 unit VEC3, from the height rule's gradient)
+ * and y the vertex's height, and uint32 indices, in a buffer
  * of the positions, the normals, then the indices. Positions are
  * metres relative to the block's origin (its lower-left corner in the
  * working CRS), so float32 keeps them to the lattice; glTF's axes are +X
@@ -97,40 +97,22 @@ static size_t bin_length(const wm_block_result *r, size_t nv, size_t nt)
     return (r->z ? 24 : 12) * nv + 12 * nt;
 }
 
-/* Unit normals of the vertices of r (glTF axes), each the sum of its
- * triangles' area-weighted normals; straight up where that vanishes. */
-static void normals(const wm_block_result *r, const float *pos, size_t nt,
-                    size_t nv, float *nrm)
+/* Unit normals of the vertices of r (glTF axes: x east, y up, z south)
+ * from the gradient of the height rule (drape.h): (-dz/dx, 1, dz/dy),
+ * normalized. A pure function of position, like the heights: a vertex on
+ * a block side has the same normal in both blocks, so shading shows no
+ * seam; lakes point straight up. */
+static void normals(const WMScene *s, const wm_block_result *r, size_t nv,
+                    float *nrm)
 {
-    memset(nrm, 0, 12 * nv);
-    for (size_t t = 0; t < nt; t++)
-    {
-        const float *a = pos + 3 * (size_t)r->tris[3 * t];
-        const float *b = pos + 3 * (size_t)r->tris[3 * t + 1];
-        const float *c = pos + 3 * (size_t)r->tris[3 * t + 2];
-        const double e1[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-        const double e2[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
-        const double n[3] = {e1[1] * e2[2] - e1[2] * e2[1],
-                             e1[2] * e2[0] - e1[0] * e2[2],
-                             e1[0] * e2[1] - e1[1] * e2[0]};
-        for (int k = 0; k < 3; k++)
-            for (int j = 0; j < 3; j++)
-                nrm[3 * (size_t)r->tris[3 * t + (size_t)k] + (size_t)j] +=
-                    (float)n[j];
-    }
     for (size_t i = 0; i < nv; i++)
     {
-        float *n = nrm + 3 * i;
-        const double len = sqrt((double)n[0] * n[0] + (double)n[1] * n[1] +
-                                (double)n[2] * n[2]);
-        if (!(len > 0))
-        {
-            n[0] = n[2] = 0.0f;
-            n[1] = 1.0f;
-            continue;
-        }
-        for (int k = 0; k < 3; k++)
-            n[k] = (float)(n[k] / len);
+        const double gx = r->zgrad[2 * i] / s->unit;
+        const double gy = r->zgrad[2 * i + 1] / s->unit;
+        const double len = sqrt(gx * gx + 1 + gy * gy);
+        nrm[3 * i] = (float)(-gx / len);
+        nrm[3 * i + 1] = (float)(1 / len);
+        nrm[3 * i + 2] = (float)(gy / len);
     }
 }
 
@@ -164,7 +146,7 @@ static unsigned char *bin_chunk(const WMScene *s, const wm_block_result *r,
         }
     }
     if (r->z)
-        normals(r, pos, nt, nv, pos + 3 * nv);
+        normals(s, r, nv, pos + 3 * nv);
     uint32_t *idx = (uint32_t *)(bin + bin_length(r, nv, 0));
     for (size_t i = 0; i < 3 * nt; i++)
         idx[i] = r->tris[i];
