@@ -48,10 +48,13 @@ extern "C"
      * bad or a round changes nothing; bounds on rounds and points stop a
      * run that does not converge (then `left` counts what remains).
      *
-     * Guarantee (exact arithmetic): min_angle up to 20.7 degrees is met
-     * except at input angles below it (counted in small_input) and next
-     * to the block square; the lattice rounding and the square's fixed
-     * edges can leave a few more (counted in `left`).
+     * Guarantee (Ruppert, exact arithmetic): min_angle up to 20.7 degrees
+     * is met when no input angle is below 60 degrees. Here triangles at an
+     * input angle below min_angle are left (small_input), refinement near
+     * input angles below 60 degrees may cascade until the bounds on rounds
+     * and points stop it, and triangles next to the block square, whose
+     * edges are never split, may stay bad; `left` counts those, and what
+     * the lattice rounding leaves.
      *
      * @param tris   out: 3 * *ntris indices into the input points followed
      *               by *extra (index npts + k is (*extra)[k]); free() it
