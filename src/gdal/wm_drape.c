@@ -575,14 +575,14 @@ static void heap_pop(heap *h, double *key, size_t *node)
     h->node[i] = v;
 }
 
-/* Propagates over the CSR lists (start, next): a node not pinned takes a
+/* propagate() over any network, cycles too: a node not pinned takes a
  * neighbour u's level where lower (carve, down the flow) or higher (fill,
  * up the flow) than its own. Nodes are settled in order of level, lowest
  * first when carving, highest first when filling (as Dijkstra's
  * algorithm): a node's level moves at most once per neighbour settled
  * before it, so the cost is O(edges log nodes) whatever the network. */
-static void propagate(network *nw, const size_t *start, const size_t *next,
-                      int fill)
+static void propagate_heap(network *nw, const size_t *start, const size_t *next,
+                           int fill)
 {
     const size_t m = start[nw->n];
     heap h = {CPLMalloc((nw->n + m + 1) * sizeof(double)),
@@ -610,6 +610,49 @@ static void propagate(network *nw, const size_t *start, const size_t *next,
     }
     CPLFree(h.key);
     CPLFree(h.node);
+}
+
+/* One relaxation: v takes u's level where lower (carve) or higher (fill)
+ * than its own, unless pinned. */
+static void relax(network *nw, size_t u, size_t v, int fill)
+{
+    const int move =
+        fill ? nw->level[v] < nw->level[u] : nw->level[v] > nw->level[u];
+    if (!nw->pin[v] && move)
+        nw->level[v] = nw->level[u];
+}
+
+/* Propagates over the CSR lists (start, next): a node not pinned takes a
+ * neighbour's level where lower (carve, down the flow) or higher (fill,
+ * up the flow) than its own. In topological order (Kahn) a network
+ * without cycles is done in O(nodes + edges); braided rivers (cycles)
+ * then go through the heap. */
+static void propagate(network *nw, const size_t *start, const size_t *next,
+                      int fill)
+{
+    const size_t n = nw->n;
+    size_t *indeg = CPLCalloc(n + 1, sizeof *indeg);
+    size_t *queue = CPLMalloc((n + 1) * sizeof *queue);
+    for (size_t k = 0; k < start[n]; k++)
+        indeg[next[k]]++;
+    size_t qh = 0, qt = 0;
+    for (size_t i = 0; i < n; i++)
+        if (!indeg[i])
+            queue[qt++] = i;
+    while (qh < qt)
+    {
+        const size_t u = queue[qh++];
+        for (size_t k = start[u]; k < start[u + 1]; k++)
+        {
+            relax(nw, u, next[k], fill);
+            if (--indeg[next[k]] == 0)
+                queue[qt++] = next[k];
+        }
+    }
+    CPLFree(indeg);
+    CPLFree(queue);
+    if (qt < n) /* cycles */
+        propagate_heap(nw, start, next, fill);
 }
 
 static void network_free(network *nw)
