@@ -27,6 +27,7 @@ objs=""
 for f in "$src"/src/core/*.c "$src"/src/gdal/wm_options.c \
   "$src"/src/gdal/wm_ingest.c "$src"/src/gdal/wm_device.c \
   "$src"/src/gdal/wm_run.c "$src"/src/gdal/wm_shard.c \
+  "$src"/src/gdal/wm_drape.c \
   "$src"/src/cl/wm_cl_none.c; do
   o="$out/obj/$(basename "$f" .c).o"
   # rebuilt when its source or any header is newer
