@@ -33,6 +33,7 @@
 
 #include "cdt.h"
 #include "lattice.h"
+#include "scene.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -40,13 +41,6 @@
 
 #define MAX_ROUNDS 100
 #define PI 3.14159265358979323846
-
-/* Floor division, b > 0. */
-static int64_t floordiv(int64_t a, int64_t b)
-{
-    const int64_t q = a / b;
-    return (a % b != 0 && a < 0) ? q - 1 : q;
-}
 
 /* A growable array of int32 (ring point indices, Steiner points). */
 typedef struct
@@ -260,8 +254,8 @@ static int cut_long_edges(refiner *r, int shores)
                 continue;
             const int64_t step = ga < gb ? L : -L;
             /* the first multiple of L strictly past ga towards gb */
-            int64_t g =
-                ga < gb ? (floordiv(ga, L) + 1) * L : floordiv(ga - 1, L) * L;
+            int64_t g = ga < gb ? (wm_floordiv(ga, L) + 1) * L
+                                : wm_floordiv(ga - 1, L) * L;
             for (; ga < gb ? g < gb : g > gb; g += step)
             {
                 const wm_pt m = vertical ? (wm_pt){a.x, (int32_t)(g - o)}
