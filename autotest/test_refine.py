@@ -1,6 +1,6 @@
 """MIN_ANGLE and MAX_EDGE: the mesh refined with Steiner points (Ruppert's
 Delaunay refinement, src/core/refine.c) on the bundled Andorra extract.
-Angles are met but at input angles and next to block sides (what -stats
+Angles are met but at and near small input angles (what -stats
 reports), edges are met everywhere, block sides still match vertex for
 vertex (no T-junction), the mesh still covers its water polygon, and the
 output does not depend on the thread count."""
@@ -52,6 +52,28 @@ def on_side(q):
     return any(abs(v / BLOCK - round(v / BLOCK)) < 1e-12 for v in q)
 
 
+def small_input_angles(path):
+    """{block: [apex]}: the water polygons' vertices whose interior angle is
+    below 60 degrees (water on the left of every ring, as written)."""
+    ds = gdal.OpenEx(path, gdal.OF_VECTOR)
+    out = {}
+    for f in ds.GetLayerByName('water'):
+        g = f.GetGeometryRef()
+        polys = [g] if g.GetGeometryType() == ogr.wkbPolygon else \
+            [g.GetGeometryRef(i) for i in range(g.GetGeometryCount())]
+        for pg in polys:
+            for r in range(pg.GetGeometryCount()):
+                pts = [p[:2] for p in pg.GetGeometryRef(r).GetPoints()[:-1]]
+                for k, b in enumerate(pts):
+                    a, c = pts[k - 1], pts[(k + 1) % len(pts)]
+                    ux, uy, vx, vy = c[0] - b[0], c[1] - b[1], a[0] - b[0], a[1] - b[1]
+                    # counter-clockwise from the outgoing to the incoming edge
+                    ang = math.degrees(math.atan2(ux * vy - uy * vx, ux * vx + uy * vy)) % 360
+                    if ang < 60:
+                        out.setdefault((f['block_x'], f['block_y']), []).append(b)
+    return out
+
+
 def stats(text):
     m = re.search(r'refinement: (\d+) points added; (\d+) triangles below MIN_ANGLE at input '
                   r'angles .*?; (\d+) others', text)
@@ -79,10 +101,18 @@ def test_min_angle_met_but_where_reported(refined):
     # the unrefined mesh is full of slivers; what stays is what -stats says
     assert before > 20 * len(below), (before, len(below))
     assert abs(len(below) - (at_input + others)) <= 2, (len(below), at_input, others)
-    assert len(below) < 0.005 * len(tris)
-    # all but a few of those touch a block side, which refinement never moves
-    inner = [t for t in below if not any(on_side(q) for q in t[2])]
-    assert len(inner) <= at_input + 0.25 * len(below), (len(inner), at_input, len(below))
+    assert len(below) < 0.001 * len(tris)
+    # all but a few of those lie near an input angle below 60 degrees (two
+    # shore edges, or a shore and a block side), where Ruppert's guarantee
+    # does not hold; block sides are graded, not left alone
+    apices = small_input_angles(path)
+    far = []
+    for block, _, pts in below:
+        size = max(math.dist(pts[k], pts[(k + 1) % 3]) for k in range(3))
+        c = (sum(p[0] for p in pts) / 3, sum(p[1] for p in pts) / 3)
+        if not any(math.dist(c, a) < 20 * size for a in apices.get(block, ())):
+            far.append(pts)
+    assert len(far) <= 2, far
 
 
 def test_max_edge_met_everywhere(refined):

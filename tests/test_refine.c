@@ -130,6 +130,58 @@ static void square_with_hole(wm_rings *r, int S)
     ring(r, hole, 4);
 }
 
+/* Shore segments in global lattice units; the room of a point is its
+ * distance to the nearest, a function of global points. */
+typedef struct
+{
+    int n;
+    double seg[4][4];
+} shores;
+
+static double room_of_shores(void *user, int64_t X, int64_t Y)
+{
+    const shores *sh = user;
+    double best = INFINITY;
+    for (int i = 0; i < sh->n; i++)
+    {
+        const double *g = sh->seg[i];
+        const double dx = g[2] - g[0], dy = g[3] - g[1];
+        double t = (((double)X - g[0]) * dx + ((double)Y - g[1]) * dy) /
+                   (dx * dx + dy * dy);
+        t = t < 0 ? 0 : (t > 1 ? 1 : t);
+        const double ex = (double)X - g[0] - t * dx;
+        const double ey = (double)Y - g[1] - t * dy;
+        const double d = sqrt(ex * ex + ey * ey);
+        best = d < best ? d : best;
+    }
+    return best;
+}
+
+/* Refines rings r and writes the y of its Steiner points on the line
+ * x = side, ascending (at most max); their count, or -1 on failure. */
+static int side_points(const wm_rings *r, const wm_refine_opts *o, int side,
+                       int32_t *y, int max, wm_refine_stats *st)
+{
+    uint32_t *tris = NULL;
+    wm_pt *extra = NULL;
+    size_t nt = 0, nx = 0;
+    int n = 0;
+    if (wm_refine_triangulate(r->pts, r->start, r->nrings, o, &tris, &nt,
+                              &extra, &nx, st, NULL) != WM_OK)
+        return -1;
+    for (size_t i = 0; i < nx; i++)
+        if (extra[i].x == side && n < max)
+        {
+            int k = n++;
+            for (; k > 0 && y[k - 1] > extra[i].y; k--)
+                y[k] = y[k - 1];
+            y[k] = extra[i].y;
+        }
+    free(tris);
+    free(extra);
+    return n;
+}
+
 int main(void)
 {
     /* a square with a hole, a long river-like strip, MIN_ANGLE 20 */
@@ -312,6 +364,58 @@ int main(void)
         TAP_EQ(bad_side, 0,
                "300 polygons touching the square: no point on "
                "it but the multiples of MAX_EDGE");
+    }
+    /* water across the side x = S between two blocks, with a shore vertex
+     * of the left block close to the side edge: with a room callback (the
+     * distance to the shores of both blocks, a function of global points)
+     * both blocks grade their side edge into the same points, and fewer
+     * triangles stay sharp than with the side edge kept whole */
+    {
+        const int S = 51200;
+        const int a[] = {S,     10000,     S,     30000,   S - 20000,
+                         30000, S - 20000, 12000, S - 800, 10400};
+        const int b[] = {0, 10000, 20000, 11000, 20000, 30000, 0, 30000};
+        wm_rings ra, rb;
+        memset(&ra, 0, sizeof ra);
+        memset(&rb, 0, sizeof rb);
+        ring(&ra, a, 5);
+        ring(&rb, b, 4);
+        const shores sh = {4,
+                           {{S - 20000, 12000, S - 800, 10400},
+                            {S - 800, 10400, S, 10000},
+                            {S, 10000, 2 * S, 11000},
+                            {S - 20000, 30000, S + 20000, 30000}}};
+        size_t left[2] = {0, 0}, graded = 0, differ = 0, fail = 0;
+        for (int with = 0; with < 2; with++)
+        {
+            const wm_refine_opts oa = {
+                20, 0, S, 0, 0, with ? room_of_shores : NULL, (void *)&sh};
+            const wm_refine_opts ob = {
+                20, 0, S, S, 0, with ? room_of_shores : NULL, (void *)&sh};
+            int32_t ya[64], yb[64];
+            wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
+            const int na = side_points(&ra, &oa, S, ya, 64, &sa);
+            const int nb = side_points(&rb, &ob, 0, yb, 64, &sb);
+            fail += na < 0 || nb < 0;
+            left[with] = sa.left + sb.left;
+            if (with)
+            {
+                graded = (size_t)(na > 0 ? na : 0);
+                differ = na != nb;
+                for (int i = 0; !differ && i < na; i++)
+                    differ = ya[i] != yb[i];
+            }
+        }
+        TAP_EQ(fail, 0, "water across a side: refined in both blocks");
+        TAP_OK(graded >= 2, "water across a side: %zu graded side points",
+               graded);
+        TAP_EQ(differ, 0, "water across a side: both blocks cut it alike");
+        TAP_OK(left[1] < left[0],
+               "water across a side: %zu sharp triangles left, %zu with the "
+               "side edge whole",
+               left[1], left[0]);
+        wm_rings_free(&ra);
+        wm_rings_free(&rb);
     }
     /* invalid input is the CDT's error */
     {

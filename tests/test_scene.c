@@ -1,6 +1,7 @@
 /* test_scene.c - the reach index: per block and per row, the R-tree's
  * answers equal a brute-force scan over every item's reach, on random
- * scenes with tiny, long and huge items. */
+ * scenes with tiny, long and huge items; wm_scene_depth in rivers, lakes,
+ * holes and outside. */
 #include "scene.h"
 #include "scene_util.h"
 #include "tap.h"
@@ -173,6 +174,34 @@ int main(void)
     TAP_OK(nruns == 1 && runs[0] == s.bx0 && runs[1] == s.bx0 + s.nbx - 1,
            "wide river: row 0 is one run over the grid");
     free(runs);
+    wm_scene_free(&s);
+
+    /* wm_scene_depth: a river 20 px wide along y = 0 and a lake, the square
+     * 100..200 with the hole 140..160 */
+    su_init(&s, 64);
+    const double river[4] = {0, 0, 300, 0};
+    su_river(&s, river, 2, 10);
+    const double lake[16] = {100, 100, 200, 100, 200, 200, 100, 200,
+                             140, 140, 160, 140, 160, 160, 140, 160};
+    const int counts[2] = {4, 4};
+    su_lake(&s, lake, counts, 2);
+    su_finish(&s);
+    const uint32_t segs[1] = {0}, polys[1] = {0};
+    const double Q = WM_Q;
+    TAP_OK(fabs(wm_scene_depth(&s, segs, 1, polys, 1, 50 * WM_Q, 4 * WM_Q) -
+                6 * Q) < 1e-9,
+           "depth in a river: r - distance to its axis");
+    TAP_OK(fabs(wm_scene_depth(&s, segs, 1, polys, 1, 130 * WM_Q, 150 * WM_Q) -
+                10 * Q) < 1e-9,
+           "depth in a lake: distance to its nearest edge, a hole's too");
+    TAP_OK(wm_scene_depth(&s, segs, 1, polys, 1, 150 * WM_Q, 150 * WM_Q) == 0,
+           "depth in a lake's hole: 0");
+    TAP_OK(wm_scene_depth(&s, segs, 1, polys, 1, 50 * WM_Q, 50 * WM_Q) == 0,
+           "depth outside every item: 0");
+    TAP_OK(wm_scene_depth(&s, segs, 1, polys, 1, 100 * WM_Q, 150 * WM_Q) == 0,
+           "depth on a lake's shore: 0");
+    TAP_OK(wm_scene_depth(&s, segs, 1, polys, 0, 120 * WM_Q, 130 * WM_Q) == 0,
+           "depth counts only the items passed");
     wm_scene_free(&s);
     return TAP_DONE();
 }

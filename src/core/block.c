@@ -196,6 +196,60 @@ static wm_status add_triangles(wm_block_result *res, size_t *cap, size_t p,
     return WM_OK;
 }
 
+/* The items that may hold a point of a block square's outline: the block's
+ * river segments and lake polygons whose box (grown by the radius) meets
+ * the outline. The room at a point of the outline is its depth in them
+ * (wm_scene_depth), which the block across computes alike. */
+typedef struct
+{
+    const wm_scene *s;
+    uint32_t *ids; /* segs, then polys (owned) */
+    size_t nsegs, npolys;
+} side_items;
+
+static double side_room(void *user, int64_t X, int64_t Y)
+{
+    const side_items *si = user;
+    return wm_scene_depth(si->s, si->ids, si->nsegs, si->ids + si->nsegs,
+                          si->npolys, X, Y);
+}
+
+/* Whether box b meets the outline of square q. */
+static int meets_outline(wm_box b, wm_box q)
+{
+    return b.x0 <= q.x1 && b.x1 >= q.x0 && b.y0 <= q.y1 && b.y1 >= q.y0 &&
+           !(b.x0 > q.x0 && b.x1 < q.x1 && b.y0 > q.y0 && b.y1 < q.y1);
+}
+
+static wm_status side_items_init(side_items *si, const wm_scene *s, int64_t bx,
+                                 int64_t by)
+{
+    const wm_box q = wm_scene_block_box(s, bx, by);
+    const wm_box blocks = {bx, by, bx, by};
+    size_t nsegs, npolys, k = 0;
+    memset(si, 0, sizeof *si);
+    si->s = s;
+    if (wm_scene_items(s, blocks, &si->ids, &nsegs, &npolys) != WM_OK)
+        return WM_ERR_NOMEM;
+    for (size_t i = 0; i < nsegs; i++)
+    {
+        const wm_river_seg *g = &s->segs[si->ids[i]];
+        const int64_t r = (int64_t)ceil(g->r);
+        const wm_box b = {(g->ax < g->bx ? g->ax : g->bx) - r,
+                          (g->ay < g->by ? g->ay : g->by) - r,
+                          (g->ax > g->bx ? g->ax : g->bx) + r,
+                          (g->ay > g->by ? g->ay : g->by) + r};
+        if (meets_outline(b, q))
+            si->ids[k++] = si->ids[i];
+    }
+    si->nsegs = k;
+    for (size_t i = nsegs; i < nsegs + npolys; i++)
+        if (meets_outline(s->poly_box[si->ids[i]], q))
+            si->ids[k++] = si->ids[i];
+    si->npolys = k - si->nsegs;
+    return WM_OK;
+}
+
 /* The constrained Delaunay triangulation of every polygon, refined to
  * MIN_ANGLE and MAX_EDGE when asked (refine.h). */
 static wm_status triangulate(wm_block_result *res, const wm_scene *s,
@@ -203,14 +257,19 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
 {
     const int refine = opts->min_angle > 0 || opts->max_edge > 0;
     const int64_t S = (int64_t)s->n * WM_Q;
-    const wm_refine_opts ro = {opts->min_angle, opts->max_edge, (int32_t)S,
-                               res->bx * S, res->by * S};
+    side_items si;
+    const wm_refine_opts ro = {
+        opts->min_angle, opts->max_edge, (int32_t)S, res->bx * S,
+        res->by * S,     side_room,      &si};
     wm_refine_stats rs = {0, 0, 0};
     size_t cap = 0;
+    wm_status st = WM_OK;
+    memset(&si, 0, sizeof si);
     res->poly_tri = calloc(res->npolys + 1, sizeof *res->poly_tri);
-    if (!res->poly_tri)
-        return wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
-    for (size_t p = 0; p < res->npolys; p++)
+    if (!res->poly_tri || (opts->min_angle > 0 &&
+                           side_items_init(&si, s, res->bx, res->by) != WM_OK))
+        st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
+    for (size_t p = 0; st == WM_OK && p < res->npolys; p++)
     {
         const size_t r0 = res->poly_ring[p], r1 = res->poly_ring[p + 1];
         const size_t base = res->rings.start[r0];
@@ -219,28 +278,29 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
         wm_pt *x = NULL;
         size_t nt = 0, nx = 0;
         if (!rs_)
-            return wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
+        {
+            st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
+            break;
+        }
         for (size_t r = r0; r <= r1; r++)
             rs_[r - r0] = res->rings.start[r] - base;
         const size_t np = rs_[r1 - r0];
-        wm_status st =
-            refine ? wm_refine_triangulate(res->rings.pts + base, rs_, r1 - r0,
-                                           &ro, &t, &nt, &x, &nx, &rs, ctx)
-                   : wm_cdt_triangulate(res->rings.pts + base, rs_, r1 - r0, &t,
-                                        &nt, ctx);
+        st = refine ? wm_refine_triangulate(res->rings.pts + base, rs_, r1 - r0,
+                                            &ro, &t, &nt, &x, &nx, &rs, ctx)
+                    : wm_cdt_triangulate(res->rings.pts + base, rs_, r1 - r0,
+                                         &t, &nt, ctx);
         free(rs_);
         if (st == WM_OK &&
             add_triangles(res, &cap, p, t, nt, np, x, nx) != WM_OK)
             st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
         free(t);
         free(x);
-        if (st != WM_OK)
-            return st;
     }
+    free(si.ids);
     res->steiner = rs.steiner;
     res->small_input = rs.small_input;
     res->left = rs.left;
-    return WM_OK;
+    return st;
 }
 
 wm_status wm_block_field(const wm_scene *s, int64_t bx, int64_t by,

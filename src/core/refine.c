@@ -17,8 +17,9 @@
  * together. Points are rounded to the lattice, so the CDT's predicates stay
  * exact; a split shore edge's midpoint moves by at most half a lattice
  * unit. Ring edges on the block square are never split here (the block
- * across could not know): with max_edge they are cut beforehand at the
- * global multiples of max_edge along the side.
+ * across could not know): they are cut beforehand by rules of global data
+ * (cut_side: the global multiples of max_edge, and with min_angle a
+ * grading by the water's depth along the side).
  *
  * Cost: one CDT per round (O(n log n)), O(n) to rate the triangles and
  * O(walk) per bad one; rounds until nothing changes, at most MAX_ROUNDS.
@@ -216,15 +217,89 @@ static int cut_evenly(refiner *r, wm_pt a, wm_pt b, double L, ibuf *out)
     return 1;
 }
 
-/* Cuts the ring edges longer than max_edge: those on the block square at
- * the global multiples of max_edge along the side (exact lattice points on
- * the edge; both blocks sharing the side find the same), the others into
- * equal pieces (points rounded to the lattice; with `shores`), so that
- * refinement does not halve them round after round. */
+/* A growable array of int64 (global positions along a side). */
+typedef struct
+{
+    int64_t *a;
+    size_t n, cap;
+} lbuf;
+
+/* The shortest side piece grading makes at an end of the side edge, where
+ * the room always shrinks to nothing: 8 pixels (shorter ones added
+ * triangles on the bundled extracts and synthetic scenes and cured no more
+ * of them) ... */
+#define GRADE_MIN (8 * (int64_t)WM_Q)
+/* ... and elsewhere: 1 pixel (a shore running along the side) */
+#define GRADE_INNER ((int64_t)WM_Q)
+
+/* Appends to cut the global positions halving side piece (u, v), u < v,
+ * of side edge (e0, e1) recursively, ascending: a piece is halved while
+ * longer than its room, o->room at its midpoint (the shore's distance
+ * there, or less), and than GRADE_MIN at an end of the side edge or
+ * GRADE_INNER elsewhere. Its diametral circle then lies within half the room of
+ * its midpoint, clear of the shore by half the room: no shore point of either
+ * block encroaches it, though the blocks' shores differ. Everything here is
+ * a function of global positions only. */
+static int grade_side(const refiner *r, int vertical, int64_t F, int64_t u,
+                      int64_t v, int64_t e0, int64_t e1, lbuf *cut)
+{
+    if (v - u <= (u == e0 || v == e1 ? GRADE_MIN : GRADE_INNER))
+        return 1;
+    const int64_t m = wm_floordiv(u + v, 2);
+    const double room = vertical ? r->o->room(r->o->room_user, F, m)
+                                 : r->o->room(r->o->room_user, m, F);
+    if ((double)(v - u) <= room)
+        return 1;
+    return grade_side(r, vertical, F, u, m, e0, e1, cut) &&
+           wm_push((void **)&cut->a, &cut->n, &cut->cap, &m, sizeof m) &&
+           grade_side(r, vertical, F, m, v, e0, e1, cut);
+}
+
+/* Appends to out the points cutting ring edge a -> b on the block square:
+ * at the global multiples of max_edge along the side, and, with min_angle,
+ * grading each piece (grade_side). Both blocks sharing the side find the
+ * same exact lattice points. */
+static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
+{
+    const int64_t L = (int64_t)floor(r->o->max_edge);
+    const int vertical = a.x == b.x;
+    const int64_t o = vertical ? r->o->Y0 : r->o->X0;
+    const int64_t F = vertical ? r->o->X0 + a.x : r->o->Y0 + a.y;
+    const int64_t ga = o + (vertical ? a.y : a.x);
+    const int64_t gb = o + (vertical ? b.y : b.x);
+    const int64_t e0 = ga < gb ? ga : gb, e1 = ga < gb ? gb : ga;
+    lbuf cut = {NULL, 0, 0};
+    int ok = 1;
+    for (int64_t u = e0; ok && u < e1;)
+    {
+        /* the next multiple of L past u, or the end */
+        int64_t v = L >= 1 ? (wm_floordiv(u, L) + 1) * L : e1;
+        v = v < e1 ? v : e1;
+        ok = (r->o->min_angle <= 0 || !r->o->room ||
+              grade_side(r, vertical, F, u, v, e0, e1, &cut)) &&
+             (v == e1 ||
+              wm_push((void **)&cut.a, &cut.n, &cut.cap, &v, sizeof v));
+        u = v;
+    }
+    for (size_t i = 0; ok && i < cut.n; i++)
+    {
+        const int64_t g = ga < gb ? cut.a[i] : cut.a[cut.n - 1 - i];
+        const wm_pt m = vertical ? (wm_pt){a.x, (int32_t)(g - o)}
+                                 : (wm_pt){(int32_t)(g - o), a.y};
+        int32_t im;
+        ok = add_point(r, m, &im) && ibuf_push(out, im);
+    }
+    free(cut.a);
+    return ok;
+}
+
+/* Cuts the ring edges on the block square (cut_side) and, with `shores`,
+ * those longer than max_edge into equal pieces (points rounded to the
+ * lattice), so that refinement does not halve them round after round. */
 static int cut_long_edges(refiner *r, int shores)
 {
     const int64_t L = (int64_t)floor(r->o->max_edge);
-    if (L < 1)
+    if (L < 1 && r->o->min_angle <= 0)
         return 1;
     ibuf out = {NULL, 0, 0};
     size_t *ns = malloc((r->nrings + 1) * sizeof *ns);
@@ -239,30 +314,10 @@ static int cut_long_edges(refiner *r, int shores)
             const int32_t ib = r->ring.a[b0 + (i + 1) % len];
             ok = ibuf_push(&out, ia);
             const wm_pt a = r->P[ia], b = r->P[ib];
-            if (!ok)
-                continue;
-            if (!on_square(r, a, b))
-            {
-                ok = !shores || cut_evenly(r, a, b, (double)L, &out);
-                continue;
-            }
-            const int vertical = a.x == b.x;
-            const int64_t o = vertical ? r->o->Y0 : r->o->X0;
-            const int64_t ga = o + (vertical ? a.y : a.x);
-            const int64_t gb = o + (vertical ? b.y : b.x);
-            if ((ga < gb ? gb - ga : ga - gb) <= L)
-                continue;
-            const int64_t step = ga < gb ? L : -L;
-            /* the first multiple of L strictly past ga towards gb */
-            int64_t g = ga < gb ? (wm_floordiv(ga, L) + 1) * L
-                                : wm_floordiv(ga - 1, L) * L;
-            for (; ga < gb ? g < gb : g > gb; g += step)
-            {
-                const wm_pt m = vertical ? (wm_pt){a.x, (int32_t)(g - o)}
-                                         : (wm_pt){(int32_t)(g - o), a.y};
-                int32_t im;
-                ok = add_point(r, m, &im) && ibuf_push(&out, im);
-            }
+            if (ok && on_square(r, a, b))
+                ok = cut_side(r, a, b, &out);
+            else if (ok && shores && L >= 1)
+                ok = cut_evenly(r, a, b, (double)L, &out);
         }
     }
     if (ok)
@@ -983,7 +1038,7 @@ wm_status wm_refine_triangulate(const wm_pt *pts, const size_t *ring_start,
         if (prep < 2 && !reset(&r, ring_start, n))
             goto nomem;
         if ((prep == 2 && (!cut_long_edges(&r, 1) || !seed_grid(&r))) ||
-            (prep == 1 && o->max_edge > 0 && !cut_long_edges(&r, 0)))
+            (prep == 1 && !cut_long_edges(&r, 0)))
             goto nomem;
         if (prep == 0) /* the plain CDT: r.tris is still the first one */
         {

@@ -19,6 +19,12 @@ extern "C"
         double max_edge;  /**< lattice units; 0: no length criterion */
         int32_t side;     /**< the block square's side, lattice units */
         int64_t X0, Y0;   /**< the block's origin, global lattice */
+        /** with min_angle: the room around global point (X, Y) of the
+         *  block square, lattice units, a pure function of the point (so
+         *  the blocks on both sides agree): no shore lies nearer; NULL
+         *  for none known (then only the side edge's own ends count) */
+        double (*room)(void *user, int64_t X, int64_t Y);
+        void *room_user;
     } wm_refine_opts;
 
     /** What refining left undone (statistics, summed over polygons). */
@@ -41,20 +47,26 @@ extern "C"
      * circle of one; then that ring edge is split at its midpoint (rounded
      * to the lattice, so the shore moves by at most half a lattice unit).
      * Ring edges on the block square are never split while refining: a
-     * neighbour block could not know. With max_edge, those longer than it
-     * are cut beforehand at the global lattice multiples of max_edge along
-     * the side, a rule both blocks sharing the side apply alike (so there
-     * is no T-junction). Rounds of batch insertion repeat until nothing is
-     * bad or a round changes nothing; bounds on rounds and points stop a
-     * run that does not converge (then `left` counts what remains).
+     * neighbour block could not know. They are cut beforehand by rules both
+     * blocks sharing the side apply alike (so there is no T-junction): with
+     * max_edge, at the global lattice multiples of max_edge along the side;
+     * with min_angle, each piece is halved (at its global midpoint, rounded
+     * down) while it is longer than 2 pixels and than half its room, the
+     * distance from its midpoint to the side edge's nearer end or to
+     * o->room's shore: no shore point then lies in its diametral circle,
+     * so refinement next to the side seldom needs to split it. Rounds of batch
+     * insertion repeat until nothing is bad or a round changes nothing; bounds
+     * on rounds and points stop a run that does not converge (then `left`
+     * counts what remains).
      *
      * Guarantee (Ruppert, exact arithmetic): min_angle up to 20.7 degrees
      * is met when no input angle is below 60 degrees. Here triangles at an
      * input angle below min_angle are left (small_input), refinement near
-     * input angles below 60 degrees may cascade until the bounds on rounds
-     * and points stop it, and triangles next to the block square, whose
-     * edges are never split, may stay bad; `left` counts those, and what
-     * the lattice rounding leaves.
+     * input angles below 60 degrees (a shore meeting the block square at an
+     * acute angle makes one) may cascade until the bounds on rounds and
+     * points stop it, or leave triangles whose circumcentre would split a
+     * block-square edge; `left` counts those, and what the lattice
+     * rounding leaves.
      *
      * @param tris   out: 3 * *ntris indices into the input points followed
      *               by *extra (index npts + k is (*extra)[k]); free() it

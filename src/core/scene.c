@@ -394,3 +394,50 @@ void wm_scene_free(wm_scene *s)
     free(s->reach.item);
     memset(s, 0, sizeof *s);
 }
+
+/* Squared distance from (X, Y) to segment [a, b], from exact lattice
+ * differences. */
+static double point_seg_d2(int64_t X, int64_t Y, int64_t ax, int64_t ay,
+                           int64_t bx, int64_t by)
+{
+    const double px = (double)(X - ax), py = (double)(Y - ay);
+    const double dx = (double)(bx - ax), dy = (double)(by - ay);
+    const double len2 = dx * dx + dy * dy;
+    double t = len2 > 0 ? (px * dx + py * dy) / len2 : 0.0;
+    t = t < 0 ? 0 : (t > 1 ? 1 : t);
+    const double ex = px - t * dx, ey = py - t * dy;
+    return ex * ex + ey * ey;
+}
+
+double wm_scene_depth(const wm_scene *s, const uint32_t *segs, size_t nsegs,
+                      const uint32_t *polys, size_t npolys, int64_t X,
+                      int64_t Y)
+{
+    double depth = 0;
+    for (size_t i = 0; i < nsegs; i++)
+    {
+        const wm_river_seg *g = &s->segs[segs[i]];
+        const double d =
+            g->r - sqrt(point_seg_d2(X, Y, g->ax, g->ay, g->bx, g->by));
+        depth = d > depth ? d : depth;
+    }
+    for (size_t k = 0; k < npolys; k++)
+    {
+        const wm_box b = s->poly_box[polys[k]];
+        if (X <= b.x0 || X >= b.x1 || Y <= b.y0 || Y >= b.y1)
+            continue; /* outside, or on its box: depth 0 */
+        int inside = 0;
+        double d2 = INFINITY;
+        for (size_t e = s->poly_start[polys[k]];
+             e < s->poly_start[polys[k] + 1]; e++)
+        {
+            const wm_lake_edge *g = &s->edges[e];
+            inside ^= wm_edge_crosses_ray(g, X, Y);
+            const double q = point_seg_d2(X, Y, g->ax, g->ay, g->bx, g->by);
+            d2 = q < d2 ? q : d2;
+        }
+        const double d = inside ? sqrt(d2) : 0;
+        depth = d > depth ? d : depth;
+    }
+    return depth;
+}

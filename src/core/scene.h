@@ -144,6 +144,22 @@ extern "C"
     /** Frees everything the scene owns; s may be NULL. */
     void wm_scene_free(wm_scene *s);
 
+    /**
+     * How deep global point (X, Y) lies in the water of the given items
+     * (river segments segs[], lake polygons polys[], indices into s): the
+     * largest, over the items holding the point, of its distance to that
+     * item's boundary (a capsule's r - |p - seg|, a polygon's distance to
+     * its nearest edge where its even-odd parity is 1); 0 when none holds
+     * it. Lattice units. No point of the union's boundary is nearer to
+     * (X, Y) than this (a lower bound of the distance to the dissolved
+     * shore). A pure function of the point and the items holding it, in
+     * double arithmetic on exact lattice differences: two blocks passing
+     * different supersets of those items get the same bits.
+     */
+    double wm_scene_depth(const wm_scene *s, const uint32_t *segs, size_t nsegs,
+                          const uint32_t *polys, size_t npolys, int64_t X,
+                          int64_t Y);
+
     /** Global lattice box of block (bx, by), samples included. */
     wm_box wm_scene_block_box(const wm_scene *s, int64_t bx, int64_t by);
 

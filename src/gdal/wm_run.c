@@ -523,8 +523,8 @@ void WMPrintStats(const WMScene *s, const WMRunStats *st)
     if (s->params.min_angle > 0 || s->params.max_edge > 0)
         printf("refinement: %lu points added; %lu triangles below MIN_ANGLE "
                "at input angles (between two ring edges); %lu others below "
-               "MIN_ANGLE or over MAX_EDGE (next to block sides, or not "
-               "converged)\n",
+               "MIN_ANGLE or over MAX_EDGE (near input angles below 60 "
+               "degrees, or not converged)\n",
                (unsigned long)st->steiner, (unsigned long)st->small_input,
                (unsigned long)st->left);
     const size_t *ws = s->width_source;
