@@ -710,10 +710,16 @@ static int cure(refiner *r, size_t t, int why)
         touch(r, t);
         return 1;
     }
-    /* a ring edge that stays: for a long triangle, the middle of its
-     * longest inner edge (edges halve: this ends); a sharp one stays */
-    if (!(why & LONG) || !interior_midpoint(r, t, &c) ||
-        !walk(r, t, c, &hold, &pos) || hold == SIZE_MAX)
+    /* a ring edge that stays (on the block square, or too short): a sharp
+     * triangle whose circumcentre lies inside takes it anyway (that empties
+     * its circumcircle; only the edge kept is encroached); a long one takes
+     * the middle of its longest inner edge (edges halve: this ends) */
+    if (!(why & LONG))
+        return hold == SIZE_MAX || on_ring_edge(r, hold, c)
+                   ? 0
+                   : add_steiner(r, t, hold, c);
+    if (!interior_midpoint(r, t, &c) || !walk(r, t, c, &hold, &pos) ||
+        hold == SIZE_MAX)
         return 0;
     if (r->touched[hold])
         return 2;
