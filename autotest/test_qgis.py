@@ -81,6 +81,37 @@ def test_andorra_equals_cli(qgis_env, tmp_path, form):
     assert features(mesh) == want_mesh
 
 
+def test_terrain_options_equal_cli(qgis_env, tmp_path):
+    """The advanced parameters reach the command: an elevation raster (a
+    synthetic one over Andorra), flow from the lines, a lake level
+    percentile, MIN_ANGLE and MAX_EDGE give the CLI's draped, refined
+    output, Z included."""
+    dem = str(tmp_path / 'dem.tif')
+    subprocess.run([sys.executable, os.path.join(REPO, 'tools', 'make_dem.py'), dem, '32631',
+                    '368000', '4689000', '402000', '4723500', '50'], check=True)
+    water, mesh = str(tmp_path / 'water.gpkg'), str(tmp_path / 'mesh.gpkg')
+    p = qgis_process(qgis_env, 'run', 'watermesh:watermesh',
+                     '--RIVERS=%s|layername=rivers' % ANDORRA,
+                     '--LAKES=%s|layername=lakes' % ANDORRA,
+                     '--ELEVATION=' + dem, '--FLOW=1', '--LAKE_LEVEL_PERCENTILE=25',
+                     '--MIN_ANGLE=20', '--MAX_EDGE=60',
+                     '--WATER=' + water, '--MESH=' + mesh)
+    assert p.returncode == 0, p.stdout[-2000:] + p.stderr[-2000:]
+    for flag in ('-elevation ' + dem, '-flow LINE_DIRECTION', '-lake_level_percentile 25.0',
+                 '-min_angle 20.0', '-max_edge 60.0'):
+        assert flag in p.stdout, (flag, p.stdout[-2000:])
+    ref = cli(str(tmp_path), '-elevation', dem, '-flow', 'LINE_DIRECTION',
+              '-lake_level_percentile', '25', '-min_angle', '20', '-max_edge', '60')
+    want_water, want_mesh = features(ref, 'water'), features(ref, 'mesh')
+    for got, layer in ((water, 'water'), (mesh, 'mesh')):
+        ds, ds_ref = ogr.Open(got), ogr.Open(ref)
+        kind = ds.GetLayer(0).GetGeomType()
+        assert ogr.GT_HasZ(kind) and kind == ds_ref.GetLayerByName(layer).GetGeomType()
+        ds = ds_ref = None
+    assert features(water) == want_water
+    assert features(mesh) == want_mesh
+
+
 def test_failure_reported(qgis_env, tmp_path):
     p = qgis_process(qgis_env, 'run', 'watermesh:watermesh',
                      '--RIVERS=%s|layername=rivers' % ANDORRA, '--WIDTH_BY_CLASS=nonsense',
@@ -200,9 +231,11 @@ def test_defaults_are_the_drivers():
     drv = gdal.GetDriverByName('WATERMESH')
     xml = {o.get('name'): o for o in
            ET.fromstring(drv.GetMetadataItem(gdal.DMD_OPENOPTIONLIST)).findall('Option')}
-    for name, (_, default) in algorithm.NUMBERS.items():
+    for name, (_, default, top, _) in algorithm.NUMBERS.items():
         assert float(xml[name].get('default')) == default, name
+        assert (float(xml[name].get('max')) if xml[name].get('max') else None) == top, name
     for name, values in (('METHOD', algorithm.METHODS), ('DEVICE', algorithm.DEVICES),
-                         ('MESH_GEOMETRY', algorithm.MESH_FORMS)):
+                         ('MESH_GEOMETRY', algorithm.MESH_FORMS),
+                         ('HEURISTIC', algorithm.HEURISTICS), ('FLOW', algorithm.FLOWS)):
         assert [v.text for v in xml[name].findall('Value')] == values, name
         assert xml[name].get('default') == values[0], name

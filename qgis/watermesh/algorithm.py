@@ -19,22 +19,35 @@ import subprocess
 import tempfile
 
 from qgis.core import (QgsFeatureSink, QgsProcessing, QgsProcessingAlgorithm,
-                       QgsProcessingException, QgsProcessingParameterEnum,
-                       QgsProcessingParameterFeatureSink,
+                       QgsProcessingException, QgsProcessingParameterBand,
+                       QgsProcessingParameterCrs, QgsProcessingParameterDefinition,
+                       QgsProcessingParameterEnum, QgsProcessingParameterFeatureSink,
                        QgsProcessingParameterFeatureSource,
                        QgsProcessingParameterField, QgsProcessingParameterNumber,
+                       QgsProcessingParameterRasterLayer,
                        QgsProcessingParameterString, QgsVectorLayer)
 
 METHODS = ['CONTOUR', 'PAPER']
+HEURISTICS = ['CLOSEST', 'DIRECTIONAL_CW', 'DIRECTIONAL_CCW', 'LEAST_ANGLE']
 DEVICES = ['AUTO', 'CPU', 'OPENCL']
 MESH_FORMS = ['MULTIPOLYGON', 'TIN', 'TRIANGLES']
+FLOWS = ['DEM', 'LINE_DIRECTION']
 
-# name: (description, default) of the numeric options, as the driver's
-# open option list gives them (autotest/test_qgis.py checks them)
+# name: (description, default, maximum, advanced) of the numeric options,
+# as the driver's open option list gives them (autotest/test_qgis.py checks
+# them)
 NUMBERS = {
-    'WIDTH': ('Default river width (m), where no width field or class gives one', 10.0),
-    'PIXEL_SIZE': ('Pixel size: sample spacing (m)', 0.5),
-    'BLOCK_SIZE': ('Block size (m): a multiple of the pixel size', 4096.0),
+    'WIDTH': ('Default river width (m), where no width field or class gives one', 10.0,
+              100000.0, False),
+    'PIXEL_SIZE': ('Pixel size: sample spacing (m)', 0.5, None, False),
+    'BLOCK_SIZE': ('Block size (m): a multiple of the pixel size', 4096.0, None, False),
+    'MERGE_DISTANCE': ('Merge shore vertices closer than (m; 0: off)', 0.0, None, True),
+    'MIN_FEATURE_AREA': ('Drop land holes and water parts smaller than (m²; 0: off)', 0.0,
+                         None, True),
+    'MIN_ANGLE': ('Refine the mesh to a minimum angle (degrees; 0: off)', 0.0, 30.0, True),
+    'MAX_EDGE': ('Refine the mesh to a maximum edge length (m; 0: off)', 0.0, None, True),
+    'LAKE_LEVEL_PERCENTILE': ('Lake level: percentile of the elevation along the shore',
+                              10.0, 100.0, True),
 }
 
 HELP = """Turns rivers (centerlines with widths) and lakes (polygons) into
@@ -49,7 +62,12 @@ waterway:river=10,canal=8,stream=2,drain=1.5,ditch=1,*=3 ("*" for any
 other class). Simplify: Douglas-Peucker tolerance in metres, empty for the
 pixel size, 0 for none. Threads: 0 for every CPU. Mesh geometry:
 MULTIPOLYGON (a polygon's triangles in one feature), TIN, or TRIANGLES (one
-valid polygon per triangle, what other tools read as a mesh)."""
+valid polygon per triangle, what other tools read as a mesh).
+
+Advanced: minimum angle and maximum edge refine the mesh with Steiner
+points; an elevation raster drapes both outputs (Z): lakes flat at a
+percentile of the raster along their shore, rivers level bank to bank and
+never rising downstream (flow from the raster or the lines' direction)."""
 
 
 def cli_path():
@@ -87,18 +105,39 @@ class WaterMeshAlgorithm(QgsProcessingAlgorithm):
             optional=True))
         self.addParameter(QgsProcessingParameterString(
             'WIDTH_BY_CLASS', 'Class widths (field:class=width,...,*=width)', optional=True))
-        for name, (desc, default) in NUMBERS.items():
-            self.addParameter(P(name, desc, P.Double, default, minValue=0.0))
+        advanced = []
+        for name, (desc, default, top, adv) in NUMBERS.items():
+            param = P(name, desc, P.Double, default, minValue=0.0)
+            if top is not None:
+                param.setMaximum(top)
+            self.addParameter(param)
+            if adv:
+                advanced.append(name)
         self.addParameter(P('SIMPLIFY', 'Simplify tolerance (m; empty: the pixel size)',
                             P.Double, None, optional=True, minValue=0.0))
         self.addParameter(QgsProcessingParameterEnum('METHOD', 'Boundary extraction',
                                                      METHODS, defaultValue=0))
+        self.addParameter(QgsProcessingParameterEnum(
+            'HEURISTIC', 'Border walk heuristic (method PAPER)', HEURISTICS, defaultValue=0))
         self.addParameter(QgsProcessingParameterEnum('DEVICE', 'Device computing the field',
                                                      DEVICES, defaultValue=0))
         self.addParameter(P('NUM_THREADS', 'Threads (0: every CPU)', P.Integer, 0,
                             minValue=0, maxValue=1024))
         self.addParameter(QgsProcessingParameterEnum('MESH_GEOMETRY', 'Mesh geometry',
                                                      MESH_FORMS, defaultValue=0))
+        self.addParameter(QgsProcessingParameterCrs(
+            'TARGET_SRS', 'Working CRS (projected; empty: the inputs\' or their UTM zone)',
+            optional=True))
+        self.addParameter(QgsProcessingParameterRasterLayer(
+            'ELEVATION', 'Elevation raster (drapes both outputs)', optional=True))
+        self.addParameter(QgsProcessingParameterBand(
+            'ELEVATION_BAND', 'Elevation band', 1, 'ELEVATION', optional=True))
+        self.addParameter(QgsProcessingParameterEnum('FLOW', 'River flow direction', FLOWS,
+                                                     defaultValue=0))
+        advanced += ['HEURISTIC', 'TARGET_SRS', 'ELEVATION', 'ELEVATION_BAND', 'FLOW']
+        for name in advanced:
+            param = self.parameterDefinition(name)
+            param.setFlags(param.flags() | QgsProcessingParameterDefinition.FlagAdvanced)
         self.addParameter(QgsProcessingParameterFeatureSink(
             'WATER', 'Water', QgsProcessing.TypeVectorPolygon))
         self.addParameter(QgsProcessingParameterFeatureSink(
@@ -137,12 +176,27 @@ class WaterMeshAlgorithm(QgsProcessingAlgorithm):
         if parameters.get('SIMPLIFY') is not None:
             args += ['-simplify', repr(self.parameterAsDouble(parameters, 'SIMPLIFY', context))]
         args += ['-method', METHODS[self.parameterAsEnum(parameters, 'METHOD', context)]]
+        args += ['-heuristic', HEURISTICS[self.parameterAsEnum(parameters, 'HEURISTIC',
+                                                                context)]]
         args += ['-device', DEVICES[self.parameterAsEnum(parameters, 'DEVICE', context)]]
         threads = self.parameterAsInt(parameters, 'NUM_THREADS', context)
         args += ['-num_threads', str(threads) if threads > 0 else 'ALL_CPUS']
         args += ['-mesh_geometry',
                  MESH_FORMS[self.parameterAsEnum(parameters, 'MESH_GEOMETRY', context)]]
+        crs = self.parameterAsCrs(parameters, 'TARGET_SRS', context)
+        if crs.isValid():
+            args += ['-target_srs', crs.toWkt()]
+        args += self.elevation_args(parameters, context)
         return args + [out]
+
+    def elevation_args(self, parameters, context):
+        """-elevation and its companions, when an elevation raster is given."""
+        dem = self.parameterAsRasterLayer(parameters, 'ELEVATION', context)
+        if dem is None:
+            return []
+        band = self.parameterAsInt(parameters, 'ELEVATION_BAND', context)
+        return ['-elevation', dem.source(), '-elevation_band', str(band if band > 0 else 1),
+                '-flow', FLOWS[self.parameterAsEnum(parameters, 'FLOW', context)]]
 
     def run_command(self, args, feedback):
         """Runs the command, its progress ("0...10...") to feedback; stops it
