@@ -27,6 +27,8 @@ How a scene is made (everything from one random.Random(seed)):
     vertex (the river runs through the lake, or into it when the vertex is a
     river end), the rest are free-standing; about a quarter have an island
     (a hole) and 5 % a second part.
+Presets S3 and S5 are sparse networks with L3's and L5's river counts and
+area: independent meandering lines 2-15 m wide that rarely meet, few lakes.
 --spread 4 or 16 keeps every feature's shape and moves each basin away from
 the scene origin so that the same features cover 4 or 16 times the area.
 """
@@ -52,7 +54,12 @@ PRESETS = {
     'L3': (279354, 24922, 41520, 731, 1485.0),
     'L4': (281743, 5208, 2266, 9, 1485.0),
     'L5': (641022, 44825, 83867, 1519, 36852.0),
+    # sparse networks (issue 14): L3's and L5's rivers as independent lines
+    # that rarely meet, and few lakes
+    'S3': (279354, 24922, 2266, 9, 1485.0),
+    'S5': (641022, 44825, 4532, 18, 36852.0),
 }
+SPARSE = {'S3', 'S5'}
 
 STEP = (5.0, 20.0)       # vertex spacing of rivers, m
 MEAN_STEP = sum(STEP) / 2
@@ -93,16 +100,25 @@ def meander(rng, start, heading, length, bounds, amplitude, wavelength):
     return pts
 
 
-def grow_basin(rng, basin, budget, remaining):
+def grow_basin(rng, basin, budget, remaining, sparse=False):
     """Adds polylines to the basin until it holds `budget` net vertices
     (sum of (n - 1) over its polylines) or remaining() says the scene is
     full. remaining(n) is called with the vertex count of each new polyline
-    and returns how many of its vertices may be kept (0: stop)."""
+    and returns how many of its vertices may be kept (0: stop). Sparse: every
+    polyline is an independent meandering line from a random point (no
+    tributaries), 2 to 15 m wide."""
     used = 0
     attempts = 0
     while used < budget and attempts < 2000:
         attempts += 1
-        if not basin.rivers:
+        if sparse:
+            x0, y0, x1, y1 = basin.bounds
+            pts = meander(rng, (rng.uniform(x0, x1), rng.uniform(y0, y1)),
+                          rng.uniform(0.0, 2.0 * math.pi),
+                          rng.uniform(0.3, 1.0) * basin.size, basin.bounds,
+                          (0.2, 0.7), (100.0, 400.0))
+            width, depth = rng.uniform(2.0, 15.0), 0
+        elif not basin.rivers:
             ang = rng.uniform(0.0, 2.0 * math.pi)
             r = 0.5 * basin.size
             start = (basin.cx - r * math.cos(ang), basin.cy - r * math.sin(ang))
@@ -267,7 +283,7 @@ def generate(preset, seed, spread):
             if state['done']:
                 break
             grow_basin(rng, b, net_budget * rounds - sum(len(r[0]) - 1 for r in b.rivers),
-                       lambda n: 0 if state['done'] else remaining(n))
+                       lambda n: 0 if state['done'] else remaining(n), preset in SPARSE)
     polylines = [(b, r) for b in basins for r in b.rivers]
     assert sum(len(r[0]) for _, r in polylines) == n_rv - n_rf + len(polylines)
 

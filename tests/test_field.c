@@ -207,6 +207,16 @@ int main(void)
         TAP_EQ(definition_diff(&n, &g, &deep), 0,
                "every sample as the definition says");
         TAP_OK(deep > 1000, "mixed tiles hold deep water (%d samples)", deep);
+        /* the statistics count what the narrow band evaluated, not the
+         * mixed tiles' every sample */
+        const uint64_t all = (uint64_t)g.mixed * WM_TS1 * WM_TS1;
+        TAP_OK(g.samples > 0 && 2 * g.samples < all,
+               "samples evaluated: %llu of the mixed tiles' %llu",
+               (unsigned long long)g.samples, (unsigned long long)all);
+        TAP_OK(g.pairs > 0 && g.pairs <= 11 * g.samples,
+               "sample-item distances: %llu, at most one per sample and "
+               "item (11 items)",
+               (unsigned long long)g.pairs);
         wm_field_free(&g);
         wm_scene_free(&n);
     }

@@ -565,6 +565,10 @@ wm_status wm_cl_eval(void *user, const wm_field_batch *b, const wm_ctx *ctx)
                               NULL, NULL);
     if (err != CL_SUCCESS)
         goto clerr;
+    if (b->samples) /* every sample of every tile, against its items */
+        *b->samples += (uint64_t)nt * WM_TS1 * WM_TS1;
+    if (b->pairs)
+        *b->pairs += (uint64_t)(ns + ne) * WM_TS1 * WM_TS1;
     goto cleanup;
 clerr:
     st = cl_fail(ctx, call, err);

@@ -468,8 +468,8 @@ typedef struct
  * rows farther than r + bandl from the segment are left alone (the term
  * exceeds v). */
 WM_CLONES
-static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
-                      double bandl, const span *sp)
+static uint64_t river_min(const wm_river_seg *g, int64_t X, int64_t Y,
+                          double *v, double bandl, const span *sp)
 {
     const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
     const double len2 = abx * abx + aby * aby;
@@ -479,6 +479,7 @@ static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
     int32_t j0, j1, i0, i1;
     row_span(Y, g->ay, g->by, r + bandl, &j0, &j1);
     row_span(X, g->ax, g->bx, r + bandl, &i0, &i1); /* columns alike */
+    uint64_t n = 0;
     for (int32_t j = j0; j <= j1; j++)
     {
         const double py = oy + (double)j * WM_Q;
@@ -492,15 +493,17 @@ static void river_min(const wm_river_seg *g, int64_t X, int64_t Y, double *v,
             const double cur = row[i];
             row[i] = d < cur ? d : cur;
         }
+        n += (uint64_t)(hi >= lo ? hi - lo + 1 : 0);
     }
+    return n;
 }
 
 /* du2 = min(du2, d^2 to edge) over the spanned samples of a tile; rows
  * farther than bandl from the edge are left alone (as if the edge were out
  * of reach: the distance only matters up to the clamp). */
 WM_CLONES
-static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
-                      double bandl, const span *sp)
+static uint64_t edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y,
+                          double *du2, double bandl, const span *sp)
 {
     const double abx = (double)(g->bx - g->ax), aby = (double)(g->by - g->ay);
     const double len2 = abx * abx + aby * aby;
@@ -509,6 +512,7 @@ static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
     int32_t j0, j1, i0, i1;
     row_span(Y, g->ay, g->by, bandl, &j0, &j1);
     row_span(X, g->ax, g->bx, bandl, &i0, &i1);
+    uint64_t n = 0;
     for (int32_t j = j0; j <= j1; j++)
     {
         const double py = oy + (double)j * WM_Q;
@@ -529,7 +533,9 @@ static void edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y, double *du2,
             const double cur = row[i];
             row[i] = d2 < cur ? d2 : cur;
         }
+        n += (uint64_t)(hi >= lo ? hi - lo + 1 : 0);
     }
+    return n;
 }
 
 /* v = min(v, +/- sqrt(du2)) over the spanned samples of a tile, the sign
@@ -687,24 +693,34 @@ wm_status wm_field_eval_c(void *user, const wm_field_batch *b,
     const wm_scene *s = b->s;
     const double bandl = (double)s->band * WM_Q;
     double v[TS1 * TS1], du2[TS1 * TS1];
+    uint64_t samples = 0, pairs = 0;
     for (size_t k = 0; k < b->ntiles; k++)
     {
         const int64_t X = b->org[2 * k], Y = b->org[2 * k + 1];
         span sp;
         narrow_band(b, k, X, Y, bandl, v, &sp);
+        for (int32_t j = 0; j < TS1; j++)
+            samples += (uint64_t)(sp.hi[sb_of(j)] >= sp.lo[sb_of(j)]
+                                      ? sp.hi[sb_of(j)] - sp.lo[sb_of(j)] + 1
+                                      : 0);
         for (size_t i = b->seg_start[k]; i < b->seg_start[k + 1]; i++)
-            river_min(&s->segs[b->seg[i]], X, Y, v, bandl, &sp);
+            pairs += river_min(&s->segs[b->seg[i]], X, Y, v, bandl, &sp);
         for (size_t g = b->grp_start[k]; g < b->grp_start[k + 1]; g++)
         {
             for (int32_t j = 0; j < TS1; j++) /* what edge_min2 may set */
                 for (int32_t i = sp.lo[sb_of(j)]; i <= sp.hi[sb_of(j)]; i++)
                     du2[j * TS1 + i] = INFINITY;
             for (size_t i = b->edge_start[g]; i < b->edge_start[g + 1]; i++)
-                edge_min2(&s->edges[b->edge[i]], X, Y, du2, bandl, &sp);
+                pairs +=
+                    edge_min2(&s->edges[b->edge[i]], X, Y, du2, bandl, &sp);
             lake_min(du2, b->mask + g * TS1, v, &sp);
         }
         clamp_out(v, bandl, b->val + k * TS1 * TS1);
     }
+    if (b->samples)
+        *b->samples += samples;
+    if (b->pairs)
+        *b->pairs += pairs;
     return WM_OK;
 }
 
@@ -846,10 +862,6 @@ static void store_tile(work *w, size_t t, float *val, float **dst)
             all_land &= d == band;
             all_water &= d == -band;
         }
-    f->samples += (uint64_t)(nx * ny);
-    f->pairs += (uint64_t)(nx * ny) *
-                (uint64_t)((w->tseg_start[t + 1] - w->tseg_start[t]) +
-                           (w->tedge_start[t + 1] - w->tedge_start[t]));
     if (all_land || all_water)
     {
         f->kind[t] = (uint8_t)(all_water ? WM_TILE_WATER : WM_TILE_LAND);
@@ -968,6 +980,8 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
         if (build_batch(&wk, cand + c0, n, &bb, &b) != WM_OK)
             goto nomem;
         b.val = top;
+        b.samples = &f->samples;
+        b.pairs = &f->pairs;
         st = dev ? dev->eval(dev->user, &b, ctx)
                  : wm_field_eval_c(NULL, &b, ctx);
         if (st != WM_OK)

@@ -43,8 +43,10 @@ extern "C"
         float **slab;     /**< nslab blocks holding the tiles' values (owned) */
         size_t nslab;
         size_t mixed;     /**< number of MIXED tiles */
-        uint64_t samples; /**< samples evaluated (statistics) */
-        uint64_t pairs;   /**< sample-segment pairs evaluated (statistics) */
+        uint64_t samples; /**< samples evaluated (statistics): on the C path
+                               only the narrow band's, on a device every
+                               sample of a mixed tile */
+        uint64_t pairs;   /**< sample-item distances evaluated (statistics) */
     } wm_field;
 
     /** Samples per tile side. */
@@ -82,6 +84,10 @@ extern "C"
                                        g * WM_TS1 + j is the group polygon's
                                        parity at tile sample (i, j) */
         float *val;               /**< out: ntiles * WM_TS1 * WM_TS1 */
+        uint64_t *samples;        /**< out (statistics): increased by the
+                                       samples the device computed */
+        uint64_t *pairs;          /**< out (statistics): increased by the
+                                       sample-item distances it computed */
     } wm_field_batch;
 
 /** Most tiles in one batch (bounds the batch's memory to ~4.5 MB). */
