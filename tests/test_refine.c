@@ -138,7 +138,7 @@ typedef struct
     double seg[4][4];
 } shores;
 
-static double room_of_shores(void *user, int64_t X, int64_t Y)
+static double room_of_shores(void *user, int64_t X, int64_t Y, double cap)
 {
     const shores *sh = user;
     double best = INFINITY;
@@ -154,7 +154,7 @@ static double room_of_shores(void *user, int64_t X, int64_t Y)
         const double d = sqrt(ex * ex + ey * ey);
         best = d < best ? d : best;
     }
-    return best;
+    return best < cap ? best : cap;
 }
 
 /* Refines rings r and writes the y of its Steiner points on the line
@@ -410,6 +410,7 @@ int main(void)
         TAP_OK(graded >= 2, "water across a side: %zu graded side points",
                graded);
         TAP_EQ(differ, 0, "water across a side: both blocks cut it alike");
+        TAP_OK(graded < 64, "water across a side: every side point compared");
         TAP_OK(left[1] < left[0],
                "water across a side: %zu sharp triangles left, %zu with the "
                "side edge whole",

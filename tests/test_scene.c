@@ -187,21 +187,81 @@ int main(void)
     su_lake(&s, lake, counts, 2);
     su_finish(&s);
     const uint32_t segs[1] = {0}, polys[1] = {0};
+    wm_lake_bands lb;
+    TAP_EQ(wm_lake_bands_build(&lb, &s, polys, 1), WM_OK, "lake bands");
     const double Q = WM_Q;
-    TAP_OK(fabs(wm_scene_depth(&s, segs, 1, polys, 1, 50 * WM_Q, 4 * WM_Q) -
-                6 * Q) < 1e-9,
-           "depth in a river: r - distance to its axis");
-    TAP_OK(fabs(wm_scene_depth(&s, segs, 1, polys, 1, 130 * WM_Q, 150 * WM_Q) -
+    TAP_OK(
+        fabs(wm_scene_depth(&s, segs, 1, &lb, 50 * WM_Q, 4 * WM_Q, INFINITY) -
+             6 * Q) < 1e-9,
+        "depth in a river: r - distance to its axis");
+    TAP_OK(fabs(wm_scene_depth(&s, segs, 1, &lb, 130 * WM_Q, 150 * WM_Q,
+                               INFINITY) -
                 10 * Q) < 1e-9,
            "depth in a lake: distance to its nearest edge, a hole's too");
-    TAP_OK(wm_scene_depth(&s, segs, 1, polys, 1, 150 * WM_Q, 150 * WM_Q) == 0,
+    TAP_OK(wm_scene_depth(&s, segs, 1, &lb, 150 * WM_Q, 150 * WM_Q, INFINITY) ==
+               0,
            "depth in a lake's hole: 0");
-    TAP_OK(wm_scene_depth(&s, segs, 1, polys, 1, 50 * WM_Q, 50 * WM_Q) == 0,
+    TAP_OK(wm_scene_depth(&s, segs, 1, &lb, 50 * WM_Q, 50 * WM_Q, INFINITY) ==
+               0,
            "depth outside every item: 0");
-    TAP_OK(wm_scene_depth(&s, segs, 1, polys, 1, 100 * WM_Q, 150 * WM_Q) == 0,
+    TAP_OK(wm_scene_depth(&s, segs, 1, &lb, 100 * WM_Q, 150 * WM_Q, INFINITY) ==
+               0,
            "depth on a lake's shore: 0");
-    TAP_OK(wm_scene_depth(&s, segs, 1, polys, 0, 120 * WM_Q, 130 * WM_Q) == 0,
+    TAP_OK(wm_scene_depth(&s, segs, 1, NULL, 120 * WM_Q, 130 * WM_Q,
+                          INFINITY) == 0,
            "depth counts only the items passed");
+    TAP_OK(wm_scene_depth(&s, segs, 1, &lb, 130 * WM_Q, 150 * WM_Q, 4 * Q) ==
+               4 * Q,
+           "depth capped");
+    /* the bands' distance equals a scan of every edge, around a wavy lake */
+    {
+        wm_scene w;
+        su_init(&w, 64);
+        double xy[2 * 400];
+        for (int i = 0; i < 400; i++)
+        {
+            const double a = 2 * 3.14159265358979 * i / 400;
+            const double r = 100 * (1 + 0.3 * sin(7 * a));
+            xy[2 * i] = 200 + r * cos(a);
+            xy[2 * i + 1] = 200 + r * sin(a);
+        }
+        const int n400[1] = {400};
+        su_lake(&w, xy, n400, 1);
+        su_finish(&w);
+        wm_lake_bands wb;
+        int bad = 0, inside = 0;
+        TAP_EQ(wm_lake_bands_build(&wb, &w, NULL, 0), WM_OK, "wavy lake bands");
+        for (int i = 0; i < 4000; i++)
+        {
+            const int64_t X = (int64_t)(uniform(60, 340) * WM_Q);
+            const int64_t Y = (int64_t)(uniform(60, 340) * WM_Q);
+            int par = 0;
+            double d2 = INFINITY;
+            for (size_t e = 0; e < w.nedges; e++)
+            {
+                const wm_lake_edge *g = &w.edges[e];
+                par ^= wm_edge_crosses_ray(g, X, Y);
+                const double px = (double)(X - g->ax), py = (double)(Y - g->ay);
+                const double dx = (double)(g->bx - g->ax),
+                             dy = (double)(g->by - g->ay);
+                double t = (px * dx + py * dy) / (dx * dx + dy * dy);
+                t = t < 0 ? 0 : (t > 1 ? 1 : t);
+                const double ex = px - t * dx, ey = py - t * dy;
+                d2 = ex * ex + ey * ey < d2 ? ex * ex + ey * ey : d2;
+            }
+            const double want = par ? sqrt(d2) : 0;
+            inside += par;
+            bad += wm_lake_bands_inside(&wb, 0, X, Y) != par ||
+                   wm_scene_depth(&w, NULL, 0, &wb, X, Y, INFINITY) != want;
+        }
+        TAP_OK(inside > 1000 && bad == 0,
+               "4000 points: parity and depth from the bands equal a full "
+               "scan (%d inside, %d differ)",
+               inside, bad);
+        wm_lake_bands_free(&wb);
+        wm_scene_free(&w);
+    }
+    wm_lake_bands_free(&lb);
     wm_scene_free(&s);
     return TAP_DONE();
 }

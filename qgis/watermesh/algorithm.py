@@ -185,7 +185,7 @@ class WaterMeshAlgorithm(QgsProcessingAlgorithm):
                  MESH_FORMS[self.parameterAsEnum(parameters, 'MESH_GEOMETRY', context)]]
         crs = self.parameterAsCrs(parameters, 'TARGET_SRS', context)
         if crs.isValid():
-            args += ['-target_srs', crs.toWkt()]
+            args += ['-target_srs', crs.authid() or crs.toWkt()]
         args += self.elevation_args(parameters, context)
         return args + [out]
 
@@ -194,6 +194,10 @@ class WaterMeshAlgorithm(QgsProcessingAlgorithm):
         dem = self.parameterAsRasterLayer(parameters, 'ELEVATION', context)
         if dem is None:
             return []
+        if dem.providerType() != 'gdal':
+            raise QgsProcessingException(
+                'Elevation raster %s: a file GDAL reads is needed (its provider is %s)'
+                % (dem.name(), dem.providerType()))
         band = self.parameterAsInt(parameters, 'ELEVATION_BAND', context)
         return ['-elevation', dem.source(), '-elevation_band', str(band if band > 0 else 1),
                 '-flow', FLOWS[self.parameterAsEnum(parameters, 'FLOW', context)]]

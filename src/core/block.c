@@ -205,13 +205,13 @@ typedef struct
     const wm_scene *s;
     uint32_t *ids; /* segs, then polys (owned) */
     size_t nsegs, npolys;
+    wm_lake_bands lakes; /* of the polys */
 } side_items;
 
-static double side_room(void *user, int64_t X, int64_t Y)
+static double side_room(void *user, int64_t X, int64_t Y, double cap)
 {
     const side_items *si = user;
-    return wm_scene_depth(si->s, si->ids, si->nsegs, si->ids + si->nsegs,
-                          si->npolys, X, Y);
+    return wm_scene_depth(si->s, si->ids, si->nsegs, &si->lakes, X, Y, cap);
 }
 
 /* Whether box b meets the outline of square q. */
@@ -247,7 +247,13 @@ static wm_status side_items_init(side_items *si, const wm_scene *s, int64_t bx,
         if (meets_outline(s->poly_box[si->ids[i]], q))
             si->ids[k++] = si->ids[i];
     si->npolys = k - si->nsegs;
-    return WM_OK;
+    return wm_lake_bands_build(&si->lakes, s, si->ids + si->nsegs, si->npolys);
+}
+
+static void side_items_free(side_items *si)
+{
+    free(si->ids);
+    wm_lake_bands_free(&si->lakes);
 }
 
 /* The constrained Delaunay triangulation of every polygon, refined to
@@ -296,7 +302,7 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
         free(t);
         free(x);
     }
-    free(si.ids);
+    side_items_free(&si);
     res->steiner = rs.steiner;
     res->small_input = rs.small_input;
     res->left = rs.left;

@@ -20,10 +20,11 @@ extern "C"
         int32_t side;     /**< the block square's side, lattice units */
         int64_t X0, Y0;   /**< the block's origin, global lattice */
         /** with min_angle: the room around global point (X, Y) of the
-         *  block square, lattice units, a pure function of the point (so
-         *  the blocks on both sides agree): no shore lies nearer; NULL
-         *  for none known (then only the side edge's own ends count) */
-        double (*room)(void *user, int64_t X, int64_t Y);
+         *  block square, lattice units, or cap when it is larger; a pure
+         *  function of the point and cap (so the blocks on both sides
+         *  agree): no shore lies nearer. NULL: block-square edges are not
+         *  graded (only max_edge cuts them) */
+        double (*room)(void *user, int64_t X, int64_t Y, double cap);
         void *room_user;
     } wm_refine_opts;
 
@@ -50,11 +51,13 @@ extern "C"
      * neighbour block could not know. They are cut beforehand by rules both
      * blocks sharing the side apply alike (so there is no T-junction): with
      * max_edge, at the global lattice multiples of max_edge along the side;
-     * with min_angle, each piece is halved (at its global midpoint, rounded
-     * down) while it is longer than 2 pixels and than half its room, the
-     * distance from its midpoint to the side edge's nearer end or to
-     * o->room's shore: no shore point then lies in its diametral circle,
-     * so refinement next to the side seldom needs to split it. Rounds of batch
+     * with min_angle and o->room, each piece is halved (at its global
+     * midpoint, rounded down) while it is longer than its room at that
+     * midpoint and than 8 pixels at an end of the side edge, 1 pixel
+     * elsewhere: no point of the inputs' shore then lies within half the
+     * room of its diametral circle, so refinement next to the side seldom
+     * needs to split it (the extracted shore lies within about a pixel
+     * and SIMPLIFY of the inputs'). Rounds of batch
      * insertion repeat until nothing is bad or a round changes nothing; bounds
      * on rounds and points stop a run that does not converge (then `left`
      * counts what remains).

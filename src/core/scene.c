@@ -409,35 +409,188 @@ static double point_seg_d2(int64_t X, int64_t Y, int64_t ax, int64_t ay,
     return ex * ex + ey * ey;
 }
 
+/* Polygon k's index in s. */
+static size_t lb_poly(const wm_lake_bands *lb, size_t k)
+{
+    return lb->poly ? lb->poly[k] : k;
+}
+
+size_t wm_lake_bands_of(const wm_lake_bands *lb, size_t k, int64_t y)
+{
+    const int64_t y0 = lb->s->poly_box[lb_poly(lb, k)].y0;
+    const int64_t nb = (int64_t)(lb->band0[k + 1] - lb->band0[k]);
+    int64_t b = y < y0 ? 0 : (y - y0) / lb->bh[k];
+    b = b > nb - 1 ? nb - 1 : b;
+    return lb->band0[k] + (size_t)b;
+}
+
+/* Bands of polygon p: about one per 8 edges, fewer while the edges would
+ * be registered more than 16 times their number (long edges span many). */
+static int64_t band_count(const wm_scene *s, size_t p)
+{
+    const size_t n = s->poly_start[p + 1] - s->poly_start[p];
+    const int64_t h = s->poly_box[p].y1 - s->poly_box[p].y0 + 1;
+    for (int64_t nb = (int64_t)(n / 8) + 1;; nb = nb / 2)
+    {
+        if (nb <= 1)
+            return 1;
+        const int64_t bh = (h + nb - 1) / nb;
+        size_t spans = 0;
+        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
+        {
+            const wm_lake_edge *g = &s->edges[e];
+            spans +=
+                (size_t)((g->by > g->ay ? g->by - g->ay : g->ay - g->by) / bh +
+                         2);
+        }
+        if (spans <= 16 * n)
+            return nb;
+    }
+}
+
+void wm_lake_bands_free(wm_lake_bands *lb)
+{
+    if (!lb)
+        return;
+    free(lb->band0);
+    free(lb->bh);
+    free(lb->start);
+    free(lb->edge);
+    memset(lb, 0, sizeof *lb);
+}
+
+wm_status wm_lake_bands_build(wm_lake_bands *lb, const wm_scene *s,
+                              const uint32_t *poly, size_t npolys)
+{
+    memset(lb, 0, sizeof *lb);
+    lb->s = s;
+    lb->poly = poly;
+    lb->npolys = poly ? npolys : s->npolys;
+    const size_t np = lb->npolys;
+    lb->band0 = malloc((np + 1) * sizeof *lb->band0);
+    lb->bh = malloc((np + 1) * sizeof *lb->bh);
+    size_t *cur = NULL;
+    if (!lb->band0 || !lb->bh)
+        goto nomem;
+    lb->band0[0] = 0;
+    for (size_t k = 0; k < np; k++)
+    {
+        const size_t p = lb_poly(lb, k);
+        const int64_t nb = band_count(s, p);
+        const int64_t h = s->poly_box[p].y1 - s->poly_box[p].y0 + 1;
+        lb->bh[k] = (h + nb - 1) / nb;
+        lb->band0[k + 1] = lb->band0[k] + (size_t)nb;
+    }
+    const size_t nbands = lb->band0[np];
+    lb->start = calloc(nbands + 1, sizeof *lb->start);
+    if (!lb->start)
+        goto nomem;
+    for (int pass = 0; pass < 2; pass++)
+    {
+        if (pass == 1)
+        {
+            cur = wm_csr_begin(lb->start, nbands);
+            lb->edge = malloc((lb->start[nbands] + 1) * sizeof *lb->edge);
+            if (!cur || !lb->edge)
+                goto nomem;
+        }
+        for (size_t k = 0; k < np; k++)
+        {
+            const size_t p = lb_poly(lb, k);
+            for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
+            {
+                const wm_lake_edge *g = &s->edges[e];
+                const size_t b0 =
+                    wm_lake_bands_of(lb, k, g->ay < g->by ? g->ay : g->by);
+                const size_t b1 =
+                    wm_lake_bands_of(lb, k, g->ay < g->by ? g->by : g->ay);
+                for (size_t b = b0; b <= b1; b++)
+                    if (pass == 0)
+                        lb->start[b + 1]++;
+                    else
+                        lb->edge[cur[b]++] = e;
+            }
+        }
+    }
+    free(cur);
+    return WM_OK;
+nomem:
+    free(cur);
+    wm_lake_bands_free(lb);
+    return WM_ERR_NOMEM;
+}
+
+int wm_lake_bands_inside(const wm_lake_bands *lb, size_t k, int64_t X,
+                         int64_t Y)
+{
+    const wm_box *b = &lb->s->poly_box[lb_poly(lb, k)];
+    if (X < b->x0 || X > b->x1 || Y < b->y0 || Y > b->y1)
+        return 0;
+    const size_t q = wm_lake_bands_of(lb, k, Y);
+    int par = 0;
+    for (size_t i = lb->start[q]; i < lb->start[q + 1]; i++)
+        par ^= wm_edge_crosses_ray(&lb->s->edges[lb->edge[i]], X, Y);
+    return par;
+}
+
+/* The distance from (X, Y) to polygon k's nearest edge, or cap when none
+ * is nearer: its bands outward from the point's row, until a band's rows
+ * are farther than the best found. */
+static double lake_dist(const wm_lake_bands *lb, size_t k, int64_t X, int64_t Y,
+                        double cap)
+{
+    const size_t b0 = lb->band0[k], b1 = lb->band0[k + 1];
+    const size_t here = wm_lake_bands_of(lb, k, Y);
+    const int64_t y0 = lb->s->poly_box[lb_poly(lb, k)].y0;
+    double best2 = cap * cap;
+    for (size_t step = 0;; step++)
+    {
+        int any = 0;
+        for (int side = 0; side < (step ? 2 : 1); side++)
+        {
+            if (side == 0 ? here + step >= b1 : here < b0 + step)
+                continue;
+            const size_t b = side == 0 ? here + step : here - step;
+            /* the band's rows: y0 + (b - b0) * bh .. + bh - 1 */
+            const int64_t lo = y0 + (int64_t)(b - b0) * lb->bh[k];
+            const int64_t hi = lo + lb->bh[k] - 1;
+            /* no point of an edge in the band is nearer than its rows' gap
+             * less one (the rows cover y up to hi + 1) */
+            const int64_t gap = Y < lo ? lo - Y : (Y > hi ? Y - hi : 0);
+            const double dy = gap > 1 ? (double)(gap - 1) : 0.0;
+            if (dy * dy >= best2)
+                continue;
+            any = 1;
+            for (size_t i = lb->start[b]; i < lb->start[b + 1]; i++)
+            {
+                const wm_lake_edge *g = &lb->s->edges[lb->edge[i]];
+                const double q = point_seg_d2(X, Y, g->ax, g->ay, g->bx, g->by);
+                best2 = q < best2 ? q : best2;
+            }
+        }
+        if (!any && step > 0)
+            break;
+    }
+    return sqrt(best2);
+}
+
 double wm_scene_depth(const wm_scene *s, const uint32_t *segs, size_t nsegs,
-                      const uint32_t *polys, size_t npolys, int64_t X,
-                      int64_t Y)
+                      const wm_lake_bands *lakes, int64_t X, int64_t Y,
+                      double cap)
 {
     double depth = 0;
-    for (size_t i = 0; i < nsegs; i++)
+    for (size_t i = 0; i < nsegs && depth < cap; i++)
     {
         const wm_river_seg *g = &s->segs[segs[i]];
         const double d =
             g->r - sqrt(point_seg_d2(X, Y, g->ax, g->ay, g->bx, g->by));
         depth = d > depth ? d : depth;
     }
-    for (size_t k = 0; k < npolys; k++)
-    {
-        const wm_box b = s->poly_box[polys[k]];
-        if (X <= b.x0 || X >= b.x1 || Y <= b.y0 || Y >= b.y1)
-            continue; /* outside, or on its box: depth 0 */
-        int inside = 0;
-        double d2 = INFINITY;
-        for (size_t e = s->poly_start[polys[k]];
-             e < s->poly_start[polys[k] + 1]; e++)
+    for (size_t k = 0; lakes && k < lakes->npolys && depth < cap; k++)
+        if (wm_lake_bands_inside(lakes, k, X, Y))
         {
-            const wm_lake_edge *g = &s->edges[e];
-            inside ^= wm_edge_crosses_ray(g, X, Y);
-            const double q = point_seg_d2(X, Y, g->ax, g->ay, g->bx, g->by);
-            d2 = q < d2 ? q : d2;
+            const double d = lake_dist(lakes, k, X, Y, cap);
+            depth = d > depth ? d : depth;
         }
-        const double d = inside ? sqrt(d2) : 0;
-        depth = d > depth ? d : depth;
-    }
-    return depth;
+    return depth < cap ? depth : cap;
 }

@@ -145,20 +145,62 @@ extern "C"
     void wm_scene_free(wm_scene *s);
 
     /**
-     * How deep global point (X, Y) lies in the water of the given items
-     * (river segments segs[], lake polygons polys[], indices into s): the
-     * largest, over the items holding the point, of its distance to that
+     * Lake polygons' edges by band of rows, per polygon: a point-in-polygon
+     * test reads only the edges whose y range meets the point's band, a
+     * distance query the bands near the point, a segment's crossings the
+     * bands it spans. Polygon k of the index is s's polygon poly[k]. Band b
+     * of polygon k (band0[k] <= b < band0[k + 1]) holds the edges
+     * edge[start[b] .. start[b + 1] - 1] (indices into s->edges) whose
+     * closed y range meets its rows; about 8 edges per band, fewer bands
+     * where long edges would be registered more than 16 times their number.
+     * A polygon's bands depend on its edges alone.
+     */
+    typedef struct
+    {
+        const wm_scene *s;
+        const uint32_t *poly; /**< npolys polygon indices into s (borrowed),
+                                   or NULL for every polygon of s */
+        size_t npolys;
+        size_t *band0; /**< npolys + 1 (owned) */
+        int64_t *bh;   /**< band height per polygon, lattice (owned) */
+        size_t *start; /**< bands + 1 (owned) */
+        size_t *edge;  /**< (owned) */
+    } wm_lake_bands;
+
+    /** Builds the bands of polygons poly[0 .. npolys - 1] of s (poly NULL:
+     *  all of s's polygons; npolys is then ignored). WM_ERR_NOMEM (lb freed)
+     *  or WM_OK; free with wm_lake_bands_free(). */
+    wm_status wm_lake_bands_build(wm_lake_bands *lb, const wm_scene *s,
+                                  const uint32_t *poly, size_t npolys);
+
+    /** Frees what lb owns; lb may be zeroed. */
+    void wm_lake_bands_free(wm_lake_bands *lb);
+
+    /** The band of polygon k holding row y (clamped to its bands). */
+    size_t wm_lake_bands_of(const wm_lake_bands *lb, size_t k, int64_t y);
+
+    /** Even-odd parity of global point (X, Y) in polygon k (the field's
+     *  half-open ray rule, exact). */
+    int wm_lake_bands_inside(const wm_lake_bands *lb, size_t k, int64_t X,
+                             int64_t Y);
+
+    /**
+     * How deep global point (X, Y) lies in the water of river segments
+     * segs[] and of the polygons of `lakes` (NULL: none), capped at `cap`:
+     * the largest, over the items holding the point, of its distance to that
      * item's boundary (a capsule's r - |p - seg|, a polygon's distance to
-     * its nearest edge where its even-odd parity is 1); 0 when none holds
-     * it. Lattice units. No point of the union's boundary is nearer to
-     * (X, Y) than this (a lower bound of the distance to the dissolved
-     * shore). A pure function of the point and the items holding it, in
-     * double arithmetic on exact lattice differences: two blocks passing
-     * different supersets of those items get the same bits.
+     * its nearest edge where its parity is 1), or cap when that is larger;
+     * 0 when none holds it. Lattice units. No point of the union's boundary
+     * is nearer to (X, Y) (a lower bound of the distance to the dissolved
+     * shore). Double arithmetic on exact lattice differences; a polygon's
+     * distance reads its bands outward from the point's, so the cost grows
+     * with the edges near the point. A pure function of the point, cap and
+     * the items holding it: two blocks passing different supersets of
+     * those items get the same bits.
      */
     double wm_scene_depth(const wm_scene *s, const uint32_t *segs, size_t nsegs,
-                          const uint32_t *polys, size_t npolys, int64_t X,
-                          int64_t Y);
+                          const wm_lake_bands *lakes, int64_t X, int64_t Y,
+                          double cap);
 
     /** Global lattice box of block (bx, by), samples included. */
     wm_box wm_scene_block_box(const wm_scene *s, int64_t bx, int64_t by);

@@ -192,115 +192,6 @@ static double dem_at(dem_t *d, double x, double y)
     return wsum > 0 ? sum / wsum : NAN;
 }
 
-/* The lake polygons' edges by band of rows, per polygon: a point-in-
- * polygon test reads only the edges whose y range meets the point's band,
- * and a segment's shore crossings only those of the bands it spans, so the
- * pre-pass's queries cost a band, not a whole polygon (a lake of 60,000
- * vertices and 60,000 river vertices in its box made pinning quadratic). */
-typedef struct
-{
-    const wm_scene *s;
-    size_t *band0; /* per polygon: its first band (npolys + 1) */
-    int64_t *bh;   /* per polygon: band height, lattice units */
-    size_t *start; /* per band: offset into edge (nbands + 1) */
-    size_t *edge;  /* edge indices, by band */
-} lake_index;
-
-/* Band of y in polygon p, clamped to its bands. */
-static size_t band_of(const lake_index *li, size_t p, int64_t y)
-{
-    const int64_t y0 = li->s->poly_box[p].y0;
-    const int64_t nb = (int64_t)(li->band0[p + 1] - li->band0[p]);
-    int64_t b = y < y0 ? 0 : (y - y0) / li->bh[p];
-    b = b > nb - 1 ? nb - 1 : b;
-    return li->band0[p] + (size_t)b;
-}
-
-/* Bands of polygon p: about one per 8 edges, fewer while the edges would
- * be registered more than 16 times their number (long edges span many). */
-static int64_t band_count(const wm_scene *s, size_t p)
-{
-    const size_t n = s->poly_start[p + 1] - s->poly_start[p];
-    const int64_t h = s->poly_box[p].y1 - s->poly_box[p].y0 + 1;
-    for (int64_t nb = (int64_t)(n / 8) + 1;; nb = nb / 2)
-    {
-        if (nb <= 1)
-            return 1;
-        const int64_t bh = (h + nb - 1) / nb;
-        size_t spans = 0;
-        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
-        {
-            const wm_lake_edge *g = &s->edges[e];
-            spans += (size_t)(llabs(g->by - g->ay) / bh + 2);
-        }
-        if (spans <= 16 * n)
-            return nb;
-    }
-}
-
-static void lake_index_build(lake_index *li, const wm_scene *s)
-{
-    li->s = s;
-    li->edge = NULL;
-    li->band0 = CPLMalloc((s->npolys + 1) * sizeof *li->band0);
-    li->bh = CPLMalloc((s->npolys + 1) * sizeof *li->bh);
-    li->band0[0] = 0;
-    for (size_t p = 0; p < s->npolys; p++)
-    {
-        const int64_t nb = band_count(s, p);
-        const int64_t h = s->poly_box[p].y1 - s->poly_box[p].y0 + 1;
-        li->bh[p] = (h + nb - 1) / nb;
-        li->band0[p + 1] = li->band0[p] + (size_t)nb;
-    }
-    const size_t nbands = li->band0[s->npolys];
-    li->start = CPLCalloc(nbands + 1, sizeof *li->start);
-    size_t *cur = CPLMalloc((nbands + 1) * sizeof *cur);
-    for (int pass = 0; pass < 2; pass++)
-    {
-        if (pass == 1)
-        {
-            for (size_t b = 0; b < nbands; b++)
-                li->start[b + 1] += li->start[b];
-            memcpy(cur, li->start, nbands * sizeof *cur);
-            li->edge = CPLMalloc((li->start[nbands] + 1) * sizeof *li->edge);
-        }
-        for (size_t p = 0; p < s->npolys; p++)
-            for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
-            {
-                const wm_lake_edge *g = &s->edges[e];
-                const size_t b0 = band_of(li, p, g->ay < g->by ? g->ay : g->by);
-                const size_t b1 = band_of(li, p, g->ay < g->by ? g->by : g->ay);
-                for (size_t b = b0; b <= b1; b++)
-                    if (pass == 0)
-                        li->start[b + 1]++;
-                    else
-                        li->edge[cur[b]++] = e;
-            }
-    }
-    CPLFree(cur);
-}
-
-static void lake_index_free(lake_index *li)
-{
-    CPLFree(li->band0);
-    CPLFree(li->bh);
-    CPLFree(li->start);
-    CPLFree(li->edge);
-}
-
-/* Even-odd test of global lattice point (X, Y) against polygon p. */
-static int in_poly(const lake_index *li, size_t p, int64_t X, int64_t Y)
-{
-    const wm_box *b = &li->s->poly_box[p];
-    if (X < b->x0 || X > b->x1 || Y < b->y0 || Y > b->y1)
-        return 0;
-    const size_t k = band_of(li, p, Y);
-    int par = 0;
-    for (size_t i = li->start[k]; i < li->start[k + 1]; i++)
-        par ^= wm_edge_crosses_ray(&li->s->edges[li->edge[i]], X, Y);
-    return par;
-}
-
 static int32_t uf_find(int32_t *up, int32_t i)
 {
     while (up[i] != i)
@@ -309,11 +200,11 @@ static int32_t uf_find(int32_t *up, int32_t i)
 }
 
 /* Whether a vertex of polygon a lies inside polygon b. */
-static int vertex_inside(const lake_index *li, size_t a, size_t b)
+static int vertex_inside(const wm_lake_bands *li, size_t a, size_t b)
 {
     const wm_scene *s = li->s;
     for (size_t e = s->poly_start[a]; e < s->poly_start[a + 1]; e++)
-        if (in_poly(li, b, s->edges[e].ax, s->edges[e].ay))
+        if (wm_lake_bands_inside(li, b, s->edges[e].ax, s->edges[e].ay))
             return 1;
     return 0;
 }
@@ -327,7 +218,7 @@ static int cmp_box_x0(const void *pa, const void *pb, void *ctx)
 }
 
 /* Bodies: overlapping polygons joined (sweep over the boxes in x). */
-static void lake_bodies(const lake_index *li, WMDrape *d)
+static void lake_bodies(const wm_lake_bands *li, WMDrape *d)
 {
     const wm_scene *s = li->s;
     const size_t n = s->npolys;
@@ -383,7 +274,7 @@ typedef struct
 /* Samples the shore of polygon p every `step` metres into *out, leaving
  * out the points inside the other polygons of its body (mates[0 .. nmates),
  * p among them). */
-static void shore_samples(const WMScene *s, const lake_index *li, dem_t *dem,
+static void shore_samples(const WMScene *s, const wm_lake_bands *li, dem_t *dem,
                           size_t p, const size_t *mates, size_t nmates,
                           double step, samples *out)
 {
@@ -401,8 +292,9 @@ static void shore_samples(const WMScene *s, const lake_index *li, dem_t *dem,
             const double Y = (double)g->ay + t * (double)(g->by - g->ay);
             int other = 0;
             for (size_t q = 0; q < nmates && !other; q++)
-                other = mates[q] != p &&
-                        in_poly(li, mates[q], llround(X), llround(Y));
+                other =
+                    mates[q] != p &&
+                    wm_lake_bands_inside(li, mates[q], llround(X), llround(Y));
             if (other)
                 continue;
             const double z = dem_at(dem, X * s->unit, Y * s->unit);
@@ -418,7 +310,7 @@ static void shore_samples(const WMScene *s, const lake_index *li, dem_t *dem,
     }
 }
 
-static int lake_levels(const WMScene *s, const lake_index *li, dem_t *dem,
+static int lake_levels(const WMScene *s, const wm_lake_bands *li, dem_t *dem,
                        WMDrape *d, double step)
 {
     const wm_scene *c = &s->core;
@@ -784,11 +676,11 @@ static double cross_t(const wm_river_seg *g, const wm_lake_edge *e)
 
 /* The crossing of segment g with polygon p's edges nearest its end
  * outside (a_in: its a end is inside): *best updated. */
-static void nearest_crossing(const lake_index *li, size_t p,
+static void nearest_crossing(const wm_lake_bands *li, size_t p,
                              const wm_river_seg *g, int a_in, double *best)
 {
-    const size_t b0 = band_of(li, p, g->ay < g->by ? g->ay : g->by);
-    const size_t b1 = band_of(li, p, g->ay < g->by ? g->by : g->ay);
+    const size_t b0 = wm_lake_bands_of(li, p, g->ay < g->by ? g->ay : g->by);
+    const size_t b1 = wm_lake_bands_of(li, p, g->ay < g->by ? g->by : g->ay);
     for (size_t k = li->start[b0]; k < li->start[b1 + 1]; k++)
     {
         const double t = cross_t(g, &li->s->edges[li->edge[k]]);
@@ -801,8 +693,8 @@ static void nearest_crossing(const lake_index *li, size_t p,
  * its knee is the shore crossing nearest the end outside, at the lake's
  * level, so the river meets the lake there at the lake's level. `in` is
  * the polygon holding the end inside, or SIZE_MAX when several do. */
-static void shore_knee(const lake_index *li, size_t in, const wm_river_seg *g,
-                       int a_in, WMDrape *d, size_t i)
+static void shore_knee(const wm_lake_bands *li, size_t in,
+                       const wm_river_seg *g, int a_in, WMDrape *d, size_t i)
 {
     const wm_scene *c = li->s;
     const int64_t X = a_in ? g->ax : g->bx, Y = a_in ? g->ay : g->by;
@@ -811,7 +703,7 @@ static void shore_knee(const lake_index *li, size_t in, const wm_river_seg *g,
         nearest_crossing(li, in, g, a_in, &best);
     else
         for (size_t p = 0; p < c->npolys; p++)
-            if (in_poly(li, p, X, Y))
+            if (wm_lake_bands_inside(li, p, X, Y))
                 nearest_crossing(li, p, g, a_in, &best);
     if (best < 0)
         return;
@@ -819,7 +711,7 @@ static void shore_knee(const lake_index *li, size_t in, const wm_river_seg *g,
     d->zk[i] = a_in ? d->za[i] : d->zb[i];
 }
 
-static int river_levels(const WMScene *s, const lake_index *li, dem_t *dem,
+static int river_levels(const WMScene *s, const wm_lake_bands *li, dem_t *dem,
                         WMDrape *d)
 {
     const wm_scene *c = &s->core;
@@ -842,7 +734,7 @@ static int river_levels(const WMScene *s, const lake_index *li, dem_t *dem,
     for (size_t p = 0; ok && p < c->npolys; p++) /* nodes in lakes */
         for (size_t i = node_of(&nw, c->poly_box[p].x0, INT64_MIN);
              i < nw.n && nw.key[2 * i] <= c->poly_box[p].x1; i++)
-            if (in_poly(li, p, nw.key[2 * i], nw.key[2 * i + 1]))
+            if (wm_lake_bands_inside(li, p, nw.key[2 * i], nw.key[2 * i + 1]))
             {
                 const double z = d->body_level[d->poly_body[p]];
                 if (!nw.pin[i] || z < nw.level[i])
@@ -914,12 +806,18 @@ int WMDrapePrepare(WMScene *s)
     int ok = dem_open(&dem, s, &step);
     if (ok)
     {
-        lake_index li;
-        lake_index_build(&li, c);
-        lake_bodies(&li, d);
-        ok =
-            lake_levels(s, &li, &dem, d, step) && river_levels(s, &li, &dem, d);
-        lake_index_free(&li);
+        wm_lake_bands li;
+        ok = wm_lake_bands_build(&li, c, NULL, 0) == WM_OK;
+        if (!ok)
+            CPLError(CE_Failure, CPLE_OutOfMemory,
+                     "WATERMESH: ELEVATION: out of memory indexing the lakes.");
+        if (ok)
+        {
+            lake_bodies(&li, d);
+            ok = lake_levels(s, &li, &dem, d, step) &&
+                 river_levels(s, &li, &dem, d);
+        }
+        wm_lake_bands_free(&li);
     }
     dem_close(&dem);
     if (!ok)
