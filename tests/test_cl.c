@@ -221,8 +221,9 @@ static void kernel_vs_c(wm_cl *cl)
         const size_t edge_start[1] = {0};
         const uint32_t seg[1] = {0};
         static float v1[2 * WM_TS1 * WM_TS1], v2[2 * WM_TS1 * WM_TS1];
-        wm_field_batch bt = {&s, 2,          org,  seg_start, seg, grp_start,
-                             0,  edge_start, NULL, NULL,      v1};
+        wm_field_batch bt = {&s,        2,    org,        seg_start, seg,
+                             grp_start, 0,    edge_start, NULL,      NULL,
+                             v1,        NULL, NULL};
         TAP_EQ(wm_field_eval_c(NULL, &bt, &ctx), WM_OK, "C: hand-made batch");
         bt.val = v2;
         TAP_EQ(wm_cl_eval(cl, &bt, &ctx), WM_OK, "OpenCL: hand-made batch");

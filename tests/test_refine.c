@@ -189,7 +189,7 @@ int main(void)
         wm_rings r;
         memset(&r, 0, sizeof r);
         square_with_hole(&r, 30000);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "square with hole: %zu triangles, %zu points added", x.ntris,
@@ -208,7 +208,7 @@ int main(void)
         static const int strip[] = {10,    10,  10000, 300, 20000, 10,
                                     20000, 110, 10000, 400, 10,    110};
         ring(&r, strip, 6);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "strip: %zu triangles, %zu points added", x.ntris, x.nextra);
@@ -230,7 +230,7 @@ int main(void)
         memset(&r, 0, sizeof r);
         static const int wedge[] = {10, 10, 50000, 400, 50000, 1400};
         ring(&r, wedge, 3);
-        wm_refine_opts o = {20, 3000, 1 << 20, 0, 0};
+        wm_refine_opts o = {20, 3000, 1 << 20, 0, 0, NULL, NULL};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "wedge: %zu triangles, %zu points", x.ntris, x.nextra);
@@ -269,7 +269,7 @@ int main(void)
             push(&r, 52000, 52000);
             push(&r, 52000, 48000);
             wm_rings_close(&r);
-            wm_refine_opts o = {20.7, 4000, 1 << 20, 0, 0};
+            wm_refine_opts o = {20.7, 4000, 1 << 20, 0, 0, NULL, NULL};
             result x = run(&r, &o);
             fail += !(x.ntris > 0 && x.ok_orient && x.ok_used);
             bad += x.below > x.st.small_input + x.st.left;
@@ -298,7 +298,8 @@ int main(void)
         memset(&r, 0, sizeof r);
         const int sq[] = {0, 0, S, 0, S, S, 0, S};
         ring(&r, sq, 4);
-        wm_refine_opts o = {20, 1500, S, 7 * (int64_t)S, 3 * (int64_t)S};
+        wm_refine_opts o = {20,   1500, S, 7 * (int64_t)S, 3 * (int64_t)S,
+                            NULL, NULL};
         uint32_t *tris = NULL;
         wm_pt *extra = NULL;
         size_t nt = 0, nx = 0;
@@ -343,7 +344,8 @@ int main(void)
             memset(&r, 0, sizeof r);
             const int xy[] = {0, 0, W, 0, W, H, dx, H, 0, y0};
             ring(&r, xy, 5);
-            const wm_refine_opts o = {20, k % 2 ? 900.0 : 0.0, 1 << 20, 0, 0};
+            const wm_refine_opts o = {
+                20, k % 2 ? 900.0 : 0.0, 1 << 20, 0, 0, NULL, NULL};
             uint32_t *tris = NULL;
             wm_pt *extra = NULL;
             size_t nt = 0, nx = 0;
@@ -424,7 +426,7 @@ int main(void)
         memset(&r, 0, sizeof r);
         static const int cw[] = {0, 0, 0, 100, 100, 0};
         ring(&r, cw, 3);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL};
         uint32_t *tris = NULL;
         wm_pt *extra = NULL;
         size_t nt = 0, nx = 0;

@@ -217,16 +217,16 @@ int main(void)
     {
         wm_scene w;
         su_init(&w, 64);
-        double xy[2 * 400];
+        double wavy[2 * 400];
         for (int i = 0; i < 400; i++)
         {
             const double a = 2 * 3.14159265358979 * i / 400;
             const double r = 100 * (1 + 0.3 * sin(7 * a));
-            xy[2 * i] = 200 + r * cos(a);
-            xy[2 * i + 1] = 200 + r * sin(a);
+            wavy[2 * i] = 200 + r * cos(a);
+            wavy[2 * i + 1] = 200 + r * sin(a);
         }
         const int n400[1] = {400};
-        su_lake(&w, xy, n400, 1);
+        su_lake(&w, wavy, n400, 1);
         su_finish(&w);
         wm_lake_bands wb;
         int bad = 0, inside = 0;

@@ -307,7 +307,8 @@ static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
     ok = ok && lpush(&pieces, e1);
     if (ok && r->o->min_angle > 0 && r->o->room)
         ok = grade_side(r, vertical, F, e0, e1, &pieces, &cut);
-    qsort(cut.a, cut.n, sizeof *cut.a, cmp_i64);
+    if (cut.n > 1)
+        qsort(cut.a, cut.n, sizeof *cut.a, cmp_i64);
     for (size_t i = 0; ok && i < cut.n; i++)
     {
         const int64_t g = ga < gb ? cut.a[i] : cut.a[cut.n - 1 - i];
