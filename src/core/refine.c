@@ -237,57 +237,35 @@ static int lpush(lbuf *b, int64_t x)
     return wm_push((void **)&b->a, &b->n, &b->cap, &x, sizeof x);
 }
 
-static int cmp_i64(const void *a, const void *b)
+/* Appends to cut the points halving piece (u, v) of side edge (e0, e1),
+ * ascending: a piece is halved at its global midpoint while it is longer
+ * than its room, o->room at that midpoint (no shore is nearer), and than
+ * GRADE_MIN at an end of the side edge or GRADE_INNER elsewhere (so a side
+ * edge makes at most one piece per pixel and one query per piece; each
+ * query reads the edges near the point, see wm_scene_depth; the recursion
+ * is as deep as log2 of the side in pixels). A piece no longer than its
+ * room has its diametral circle within half the room of its midpoint,
+ * clear of the inputs' shore by half the room. Everything here is a
+ * function of global positions only, so both blocks sharing the side find
+ * the same points. */
+static int grade_side(const refiner *r, int vertical, int64_t F, int64_t u,
+                      int64_t v, int64_t e0, int64_t e1, lbuf *cut)
 {
-    const int64_t x = *(const int64_t *)a, y = *(const int64_t *)b;
-    return (x > y) - (x < y);
-}
-
-/* Grades the pieces of side edge (e0, e1) given in pieces (pairs u < v,
- * ascending): level by level, a piece is halved at its global midpoint
- * while it is longer than its room, o->room at that midpoint (no shore is
- * nearer), and than GRADE_MIN at an end of the side edge or GRADE_INNER
- * elsewhere (so a side edge makes at most one piece per pixel and one
- * query per piece; each query reads the edges near the point, see
- * wm_scene_depth). A piece no longer than its room has its diametral
- * circle within half the room of its midpoint, clear of the inputs' shore
- * by half the room. Appends the halving points to cut (unsorted).
- * Everything here is a function of global positions only, so both blocks
- * sharing the side find the same points. */
-static int grade_side(const refiner *r, int vertical, int64_t F, int64_t e0,
-                      int64_t e1, lbuf *pieces, lbuf *cut)
-{
-    lbuf next = {NULL, 0, 0};
-    int ok = 1;
-    while (ok && pieces->n > 0)
-    {
-        next.n = 0;
-        for (size_t i = 0; ok && i < pieces->n; i += 2)
-        {
-            const int64_t u = pieces->a[i], v = pieces->a[i + 1];
-            if (v - u <= (u == e0 || v == e1 ? GRADE_MIN : GRADE_INNER))
-                continue;
-            const int64_t m = wm_floordiv(u + v, 2);
-            const double len = (double)(v - u);
-            const double room = vertical
-                                    ? r->o->room(r->o->room_user, F, m, len)
-                                    : r->o->room(r->o->room_user, m, F, len);
-            if (len > room)
-                ok = lpush(cut, m) && lpush(&next, u) && lpush(&next, m) &&
-                     lpush(&next, m) && lpush(&next, v);
-        }
-        const lbuf t = *pieces;
-        *pieces = next;
-        next = t;
-    }
-    free(next.a);
-    return ok;
+    if (v - u <= (u == e0 || v == e1 ? GRADE_MIN : GRADE_INNER))
+        return 1;
+    const int64_t m = wm_floordiv(u + v, 2);
+    const double len = (double)(v - u);
+    const double room = vertical ? r->o->room(r->o->room_user, F, m, len)
+                                 : r->o->room(r->o->room_user, m, F, len);
+    return len <= room ||
+           (grade_side(r, vertical, F, u, m, e0, e1, cut) && lpush(cut, m) &&
+            grade_side(r, vertical, F, m, v, e0, e1, cut));
 }
 
 /* Appends to out the points cutting ring edge a -> b on the block square:
  * when it is longer than max_edge, at the global multiples of max_edge
- * along the side, and, with min_angle and a room callback, grading the
- * pieces (grade_side). Both blocks sharing the side find the same exact
+ * along the side, and, with min_angle and a room callback, grading each
+ * piece (grade_side). Both blocks sharing the side find the same exact
  * lattice points. */
 static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
 {
@@ -298,17 +276,19 @@ static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
     const int64_t ga = o + (vertical ? a.y : a.x);
     const int64_t gb = o + (vertical ? b.y : b.x);
     const int64_t e0 = ga < gb ? ga : gb, e1 = ga < gb ? gb : ga;
-    lbuf cut = {NULL, 0, 0}, pieces = {NULL, 0, 0};
-    int ok = lpush(&pieces, e0);
-    /* the multiples of L strictly between the ends */
-    for (int64_t g = (wm_floordiv(e0, L >= 1 ? L : 1) + 1) * L;
-         ok && L >= 1 && e1 - e0 > L && g < e1; g += L)
-        ok = lpush(&cut, g) && lpush(&pieces, g) && lpush(&pieces, g);
-    ok = ok && lpush(&pieces, e1);
-    if (ok && r->o->min_angle > 0 && r->o->room)
-        ok = grade_side(r, vertical, F, e0, e1, &pieces, &cut);
-    if (cut.n > 1)
-        qsort(cut.a, cut.n, sizeof *cut.a, cmp_i64);
+    const int grade = r->o->min_angle > 0 && r->o->room;
+    lbuf cut = {NULL, 0, 0};
+    int ok = 1;
+    for (int64_t u = e0; ok && u < e1;)
+    {
+        /* the next multiple of L past u when the edge is longer than L,
+         * else the end */
+        int64_t v = L >= 1 && e1 - e0 > L ? (wm_floordiv(u, L) + 1) * L : e1;
+        v = v < e1 ? v : e1;
+        ok = (!grade || grade_side(r, vertical, F, u, v, e0, e1, &cut)) &&
+             (v == e1 || lpush(&cut, v));
+        u = v;
+    }
     for (size_t i = 0; ok && i < cut.n; i++)
     {
         const int64_t g = ga < gb ? cut.a[i] : cut.a[cut.n - 1 - i];
@@ -318,7 +298,6 @@ static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
         ok = add_point(r, m, &im) && ibuf_push(out, im);
     }
     free(cut.a);
-    free(pieces.a);
     return ok;
 }
 
