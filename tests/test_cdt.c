@@ -4,7 +4,9 @@
  * large random polygons; every result is checked for the triangle count,
  * orientation, ring edges, edge manifoldness, exact local Delaunay property
  * and exact area. Invalid inputs must fail cleanly. Set WM_TEST_BIG to add
- * two polygons of 1e6 vertices.
+ * two polygons of 1e6 vertices, WM_TEST_INC to the number of random
+ * polygons the incremental path (ring splits and points inside, in rounds)
+ * is checked on (1,500 by default).
  */
 #include "cdt.h"
 #include "lattice.h"
@@ -138,28 +140,30 @@ static size_t verdict_errors(const verdict *v)
            v->bad_ring + v->bad_shared + v->bad_delaunay;
 }
 
-/* Checks tris against the rings, exactly: count, orientation, area, ring
- * edges, manifold edges, local Delaunay property. */
-static verdict verify(const wm_rings *r, const uint32_t *tris, size_t nt)
+/* Checks tris against the rings and the points P[r->npts .. np) strictly
+ * inside them (P[0 .. r->npts) are the rings' points), exactly: count,
+ * orientation, area, ring edges, manifold edges, local Delaunay property. */
+static verdict verify_ex(const wm_rings *r, const wm_pt *P, size_t np,
+                         const uint32_t *tris, size_t nt)
 {
     verdict vd;
     memset(&vd, 0, sizeof vd);
     const size_t n = r->npts;
-    vd.bad_count = nt != n + 2 * (r->nrings - 1) - 2;
+    vd.bad_count = nt != n + 2 * (r->nrings - 1) - 2 + 2 * (np - n);
 
     /* orientation, indices, area */
     wm_i128 area = 0, ring_area = 0;
     for (size_t t = 0; t < nt; t++)
     {
         const uint32_t *v = tris + 3 * t;
-        if (v[0] >= n || v[1] >= n || v[2] >= n)
+        if (v[0] >= np || v[1] >= np || v[2] >= np)
         {
             vd.bad_ccw++;
             continue;
         }
-        if (wm_orient(r->pts[v[0]], r->pts[v[1]], r->pts[v[2]]) <= 0)
+        if (wm_orient(P[v[0]], P[v[1]], P[v[2]]) <= 0)
             vd.bad_ccw++;
-        area += wm_orient_det(r->pts[v[0]], r->pts[v[1]], r->pts[v[2]]);
+        area += wm_orient_det(P[v[0]], P[v[1]], P[v[2]]);
     }
     for (size_t i = 0; i < r->nrings; i++)
         ring_area += wm_ring_area2(r->pts + r->start[i], wm_rings_len(r, i));
@@ -219,8 +223,7 @@ static verdict verify(const wm_rings *r, const uint32_t *tris, size_t nt)
             vd.interior++;
             const hedge *a = he + i, *b = he + i + 1;
             const uint32_t to = a->from == a->lo ? a->hi : a->lo;
-            if (wm_incircle(r->pts[a->from], r->pts[to], r->pts[a->opp],
-                            r->pts[b->opp]) > 0)
+            if (wm_incircle(P[a->from], P[to], P[a->opp], P[b->opp]) > 0)
                 vd.bad_delaunay++;
         }
         i = j;
@@ -229,6 +232,11 @@ static verdict verify(const wm_rings *r, const uint32_t *tris, size_t nt)
     free(he);
     free(re);
     return vd;
+}
+
+static verdict verify(const wm_rings *r, const uint32_t *tris, size_t nt)
+{
+    return verify_ex(r, r->pts, r->npts, tris, nt);
 }
 
 /* Triangulates r and checks everything, one TAP line per property;
@@ -535,6 +543,345 @@ static void random_batch(int cases)
     wm_rings_free(&r);
 }
 
+/* ---- the incremental path (wm_cdt_open, wm_cdt_split, wm_cdt_insert) -- */
+
+/* A polygon as the incremental CDT numbers it: P[k] is vertex k, the rings
+ * list vertex numbers (ring q: rv[rs[q] .. rs[q + 1])), ex the points
+ * strictly inside. */
+typedef struct
+{
+    wm_pt *P;
+    uint32_t *rv, *ex;
+    size_t np, nrv, nex, nrings;
+    size_t rs[64];
+} inc_poly;
+
+/* The rings in position order (out) and every point in verify_ex's order
+ * (layout: ring positions, then ex); map: vertex number -> layout index. */
+static void inc_layout(const inc_poly *q, wm_rings *out, wm_pt *layout,
+                       uint32_t *map)
+{
+    wm_rings_clear(out);
+    for (size_t k = 0; k < q->nrings; k++)
+    {
+        for (size_t i = q->rs[k]; i < q->rs[k + 1]; i++)
+        {
+            map[q->rv[i]] = (uint32_t)out->npts;
+            layout[out->npts] = q->P[q->rv[i]];
+            push(out, q->P[q->rv[i]].x, q->P[q->rv[i]].y);
+        }
+        close_ring(out);
+    }
+    for (size_t i = 0; i < q->nex; i++)
+    {
+        map[q->ex[i]] = (uint32_t)(q->nrv + i);
+        layout[q->nrv + i] = q->P[q->ex[i]];
+    }
+}
+
+/* Whether p lies in the closed triangle a, b, c (any orientation). */
+static int in_closed(wm_pt a, wm_pt b, wm_pt c, wm_pt p)
+{
+    const int o1 = wm_orient(a, b, p), o2 = wm_orient(b, c, p);
+    const int o3 = wm_orient(c, a, p);
+    return (o1 >= 0 && o2 >= 0 && o3 >= 0) || (o1 <= 0 && o2 <= 0 && o3 <= 0);
+}
+
+/* Tries to split ring edge i of q (positions in rv) at its rounded
+ * midpoint: kept when the rings stay valid and no point inside lies in the
+ * closed triangle of the edge and the midpoint. Returns 1 when split. */
+static int inc_split(inc_poly *q, wm_cdt *c, size_t i, wm_rings *tmp,
+                     wm_pt *cut)
+{
+    size_t k = 0;
+    while (q->rs[k + 1] <= i)
+        k++;
+    const size_t len = q->rs[k + 1] - q->rs[k];
+    const uint32_t a = q->rv[i];
+    const uint32_t b = q->rv[q->rs[k] + (i - q->rs[k] + 1) % len];
+    const wm_pt pa = q->P[a], pb = q->P[b];
+    const wm_pt m = {(int32_t)(((int64_t)pa.x + pb.x) >> 1),
+                     (int32_t)(((int64_t)pa.y + pb.y) >> 1)};
+    for (size_t v = 0; v < q->np; v++)
+        if (wm_pt_eq(q->P[v], m))
+            return 0;
+    for (size_t e = 0; e < q->nex; e++)
+        if (in_closed(pa, m, pb, q->P[q->ex[e]]))
+            return 0;
+    /* the rings with m after position i */
+    wm_rings_clear(tmp);
+    for (size_t kk = 0; kk < q->nrings; kk++)
+    {
+        for (size_t j = q->rs[kk]; j < q->rs[kk + 1]; j++)
+        {
+            push(tmp, q->P[q->rv[j]].x, q->P[q->rv[j]].y);
+            if (j == i)
+                push(tmp, m.x, m.y);
+        }
+        close_ring(tmp);
+    }
+    if (!rings_valid(tmp))
+        return 0;
+    uint32_t nq = UINT32_MAX;
+    if (wm_cdt_split(c, a, b, m, &nq, NULL) != WM_OK || nq != q->np)
+        return -1;
+    q->P[q->np++] = m;
+    memmove(q->rv + i + 2, q->rv + i + 1, (q->nrv - i - 1) * sizeof *q->rv);
+    q->rv[i + 1] = nq;
+    q->nrv++;
+    for (size_t kk = k + 1; kk <= q->nrings; kk++)
+        q->rs[kk]++;
+    cut[0] = pa;
+    cut[1] = m;
+    cut[2] = pb;
+    return 1;
+}
+
+/* Whether nb gives each half-edge of tris its twin, or -1 on the nring
+ * ring edges alone. */
+static int neighbours_ok(const uint32_t *tris, size_t nt, const int32_t *nb,
+                         size_t nring)
+{
+    size_t border = 0;
+    for (size_t h = 0; nb && h < 3 * nt; h++)
+    {
+        const size_t h1 = h - h % 3 + (h + 1) % 3;
+        if (nb[h] < 0)
+        {
+            border++;
+            continue;
+        }
+        const size_t g = (size_t)nb[h], g1 = g - g % 3 + (g + 1) % 3;
+        if (g >= 3 * nt || nb[g] != (int32_t)h || tris[g] != tris[h1] ||
+            tris[g1] != tris[h])
+            return 0;
+    }
+    return nb && border == nring;
+}
+
+/* Rounds of ring splits and points inside on random polygons, each
+ * round's triangulation verified as a from-scratch one would be. */
+static void incremental_batch(int cases)
+{
+    wm_rings r, cur, tmp;
+    memset(&r, 0, sizeof r);
+    memset(&cur, 0, sizeof cur);
+    memset(&tmp, 0, sizeof tmp);
+    int done = 0, failed = 0;
+    size_t nsplit = 0, ninside = 0;
+    enum
+    {
+        CAP = 4096
+    };
+    inc_poly q;
+    q.P = malloc(CAP * sizeof *q.P);
+    q.rv = malloc(CAP * sizeof *q.rv);
+    q.ex = malloc(CAP * sizeof *q.ex);
+    wm_pt *layout = malloc(CAP * sizeof *layout),
+          *add = malloc(CAP * sizeof *add);
+    wm_pt *cuts = malloc(3 * CAP * sizeof *cuts);
+    uint32_t *map = malloc(CAP * sizeof *map);
+    if (!q.P || !q.rv || !q.ex || !layout || !add || !cuts || !map)
+        abort();
+    while (done < cases)
+    {
+        const int l = 1 << rnd(5, 12);
+        if (!random_polygon(&r, l, 6) || r.nrings > 60)
+            continue;
+        done++;
+        q.np = q.nrv = r.npts;
+        q.nex = 0;
+        q.nrings = r.nrings;
+        for (size_t i = 0; i < r.npts; i++)
+        {
+            q.P[i] = r.pts[i];
+            q.rv[i] = (uint32_t)i;
+        }
+        memcpy(q.rs, r.start, (r.nrings + 1) * sizeof *q.rs);
+        wm_cdt *c = NULL;
+        uint32_t *tris = NULL;
+        int32_t *nb = NULL;
+        size_t nt = 0;
+        wm_status st = wm_cdt_open(r.pts, r.start, r.nrings, 0, &c, &tris, &nt,
+                                   NULL, NULL);
+        int bad = st != WM_OK;
+        for (int round = 0; round < 6 && !bad; round++)
+        {
+            /* splits of random ring edges */
+            size_t ncut = 0;
+            const int ns = rnd(0, 3);
+            for (int k = 0; k < ns && q.np + 8 < CAP / 2; k++)
+            {
+                const int sp = inc_split(&q, c, (size_t)rnd(0, (int)q.nrv - 1),
+                                         &tmp, cuts + 3 * ncut);
+                bad |= sp < 0;
+                ncut += sp > 0;
+            }
+            /* centroids of random triangles of the last round, strictly
+             * inside them and clear of this round's splits */
+            size_t na = 0;
+            const int ni = rnd(0, 20);
+            for (int k = 0; k < ni && !bad && nt > 0 && q.np + na + 8 < CAP / 2;
+                 k++)
+            {
+                const uint32_t *v = tris + 3 * (size_t)rnd(0, (int)nt - 1);
+                const wm_pt a = q.P[v[0]], b = q.P[v[1]], d = q.P[v[2]];
+                const wm_pt g = {(int32_t)(((int64_t)a.x + b.x + d.x) / 3),
+                                 (int32_t)(((int64_t)a.y + b.y + d.y) / 3)};
+                int ok = wm_orient(a, b, g) > 0 && wm_orient(b, d, g) > 0 &&
+                         wm_orient(d, a, g) > 0;
+                for (size_t j = 0; ok && j < ncut; j++)
+                    ok = !in_closed(cuts[3 * j], cuts[3 * j + 1],
+                                    cuts[3 * j + 2], g);
+                for (size_t j = 0; ok && j < na; j++)
+                    ok = !wm_pt_eq(add[j], g);
+                if (ok)
+                    add[na++] = g;
+            }
+            free(tris);
+            tris = NULL;
+            st = bad ? WM_ERR_INTERNAL
+                     : wm_cdt_insert(c, add, na, &tris, &nt, &nb, NULL);
+            for (size_t j = 0; j < na; j++)
+            {
+                q.ex[q.nex++] = (uint32_t)q.np;
+                q.P[q.np++] = add[j];
+            }
+            nsplit += ncut;
+            ninside += na;
+            if (st != WM_OK)
+            {
+                bad = 1;
+                break;
+            }
+            inc_layout(&q, &cur, layout, map);
+            uint32_t *mt = malloc((3 * nt + 1) * sizeof *mt);
+            if (!mt)
+                abort();
+            for (size_t i = 0; i < 3 * nt; i++)
+                mt[i] = tris[i] < q.np ? map[tris[i]] : UINT32_MAX;
+            const verdict vd = verify_ex(&cur, layout, q.np, mt, nt);
+            free(mt);
+            const int nbad = !neighbours_ok(tris, nt, nb, q.nrv);
+            free(nb);
+            nb = NULL;
+            bad = verdict_errors(&vd) != 0 || nbad;
+            if (bad)
+                printf("# round %d: neighbours %d, count %zu ccw %zu area %zu "
+                       "miss %zu ring %zu shared %zu del %zu; np %zu nt %zu "
+                       "splits %zu add %zu\n",
+                       round, nbad, vd.bad_count, vd.bad_ccw, vd.bad_area,
+                       vd.missing_ring, vd.bad_ring, vd.bad_shared,
+                       vd.bad_delaunay, q.np, nt, ncut, na);
+        }
+        if (bad && failed++ < 3)
+            printf("# incremental case %d failed (status %d)\n", done, (int)st);
+        free(tris);
+        wm_cdt_free(c);
+    }
+    TAP_EQ(failed, 0,
+           "%d random polygons, rounds of %zu ring splits and %zu points "
+           "inside in all: every round's triangulation verified",
+           cases, nsplit, ninside);
+    free(q.P);
+    free(q.rv);
+    free(q.ex);
+    free(layout);
+    free(add);
+    free(cuts);
+    free(map);
+    wm_rings_free(&r);
+    wm_rings_free(&cur);
+    wm_rings_free(&tmp);
+}
+
+/* A point inside that becomes a ring vertex (a split at it). */
+static void incremental_existing(void)
+{
+    wm_rings r, after;
+    memset(&r, 0, sizeof r);
+    memset(&after, 0, sizeof after);
+    rect(&r, 0, 0, 100, 100, 1, 0);
+    wm_cdt *c = NULL;
+    uint32_t *tris = NULL;
+    size_t nt = 0;
+    const wm_pt in[2] = {{50, 1}, {30, 60}};
+    wm_status st =
+        wm_cdt_open(r.pts, r.start, r.nrings, 0, &c, &tris, &nt, NULL, NULL);
+    free(tris);
+    if (st == WM_OK)
+        st = wm_cdt_insert(c, in, 2, &tris, &nt, NULL, NULL);
+    free(tris);
+    uint32_t q = 4; /* (50, 1) */
+    if (st == WM_OK)
+        st = wm_cdt_split(c, 0, 1, in[0], &q, NULL);
+    tris = NULL;
+    if (st == WM_OK)
+        st = wm_cdt_insert(c, NULL, 0, &tris, &nt, NULL, NULL);
+    TAP_EQ(st, WM_OK, "incremental: a point inside becomes a ring vertex");
+    /* rings (0,0) (50,1) (100,0) (100,100) (0,100), then (30, 60) */
+    const int ring[5][2] = {{0, 0}, {50, 1}, {100, 0}, {100, 100}, {0, 100}};
+    for (int k = 0; k < 5; k++)
+        push(&after, ring[k][0], ring[k][1]);
+    close_ring(&after);
+    const wm_pt P[6] = {{0, 0},     {50, 1},  {100, 0},
+                        {100, 100}, {0, 100}, {30, 60}};
+    const uint32_t to[6] = {0, 2, 3, 4, 1, 5}; /* vertex number -> P */
+    for (size_t i = 0; st == WM_OK && i < 3 * nt; i++)
+        tris[i] = tris[i] < 6 ? to[tris[i]] : UINT32_MAX;
+    const verdict vd = verify_ex(&after, P, 6, tris, st == WM_OK ? nt : 0);
+    TAP_EQ(verdict_errors(&vd), 0,
+           "incremental: its triangulation verified (%zu triangles)", nt);
+    free(tris);
+    wm_cdt_free(c);
+    wm_rings_free(&r);
+    wm_rings_free(&after);
+}
+
+/* The incremental path refuses what breaks its contract, by name. */
+static void incremental_invalid(void)
+{
+    wm_rings r;
+    memset(&r, 0, sizeof r);
+    rect(&r, 0, 0, 100, 100, 1, 0);
+    const wm_ctx ctx = {on_error, NULL, NULL};
+    const struct
+    {
+        const char *name;
+        wm_pt p;
+    } bad[] = {{"a point outside the polygon", {150, 50}},
+               {"a point on a ring edge", {50, 0}},
+               {"a point on a vertex", {100, 100}}};
+    for (size_t k = 0; k < sizeof bad / sizeof *bad; k++)
+    {
+        wm_cdt *c = NULL;
+        uint32_t *tris = NULL;
+        size_t nt = 0;
+        TAP_EQ(wm_cdt_open(r.pts, r.start, r.nrings, 0, &c, &tris, &nt, NULL,
+                           &ctx),
+               WM_OK, "incremental: a square");
+        free(tris);
+        const int before = nerrors;
+        const wm_status st =
+            wm_cdt_insert(c, &bad[k].p, 1, &tris, &nt, NULL, &ctx);
+        TAP_EQ(st, WM_ERR_INVALID, "incremental: %s is refused", bad[k].name);
+        TAP_OK(tris == NULL && nerrors > before, "incremental: %s reported",
+               bad[k].name);
+        wm_cdt_free(c);
+    }
+    wm_cdt *c = NULL;
+    uint32_t *tris = NULL;
+    size_t nt = 0;
+    wm_cdt_open(r.pts, r.start, r.nrings, 0, &c, &tris, &nt, NULL, &ctx);
+    free(tris);
+    uint32_t q = UINT32_MAX;
+    const wm_pt m = {50, 50};
+    TAP_EQ(wm_cdt_split(c, 0, 2, m, &q, &ctx), WM_ERR_INVALID,
+           "incremental: splitting a diagonal (no ring edge) is refused");
+    wm_cdt_free(c);
+    wm_rings_free(&r);
+}
+
 static void expect_invalid(const char *name, const wm_rings *r)
 {
     const wm_ctx ctx = {on_error, NULL, NULL};
@@ -613,6 +960,10 @@ int main(void)
     /* random polygons with holes: collinear and cocircular vertices,
      * thin holes, cavities that touch themselves */
     random_batch(1500);
+    incremental_batch(getenv("WM_TEST_INC") ? atoi(getenv("WM_TEST_INC"))
+                                            : 1500);
+    incremental_existing();
+    incremental_invalid();
 
     /* large star-shaped polygons */
     /* (TAP_OK evaluates its condition twice: generate first) */

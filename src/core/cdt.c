@@ -96,11 +96,16 @@ typedef struct
     uint8_t *con; /* 1 on both half-edges of a ring edge */
     int32_t *ve;  /* one half-edge leaving each vertex */
     int32_t nv;   /* input vertices */
+    int32_t np;   /* all vertices: the input's, the super triangle's, then
+                     those wm_cdt_insert added */
     int32_t ntri; /* triangles in use */
     int32_t maxtri;
-    int32_t last; /* triangle the next point location starts from */
-    uint32_t rng; /* xorshift state for the stochastic walk */
-    ivec stack;   /* Lawson work stack */
+    uint8_t *state; /* per triangle, once labelled (flood_fill): 1 outside,
+                       2 inside; NULL before */
+    int anywhere;   /* insert_point takes a point outside the polygon too */
+    int32_t last;   /* triangle the next point location starts from */
+    uint32_t rng;   /* xorshift state for the stochastic walk */
+    ivec stack;     /* Lawson work stack */
     /* constraint insertion scratch */
     int32_t *tstamp; /* per triangle: id of the cavity it last belonged to */
     int32_t *vstamp; /* per vertex: 2 * cavity id + side, to see repeats */
@@ -154,15 +159,18 @@ static inline void pair_twins(mesh *m, int32_t a, int32_t b)
         m->tw[b] = a;
 }
 
-/* Writes triangle t = (a, b, c), counter-clockwise; links are the caller's.
- * Only used while inserting points, before any constraint exists. */
-static void set_tri(mesh *m, int32_t t, int32_t a, int32_t b, int32_t c)
+/* Writes triangle t = (a, b, c), counter-clockwise, whose first edge a->b
+ * is a constraint when con_ab (the other two are new edges at an inserted
+ * point); links are the caller's. */
+static void set_tri(mesh *m, int32_t t, int32_t a, int32_t b, int32_t c,
+                    uint8_t con_ab)
 {
     const int32_t h = 3 * t;
     m->v[h] = a;
     m->v[h + 1] = b;
     m->v[h + 2] = c;
-    m->con[h] = m->con[h + 1] = m->con[h + 2] = 0;
+    m->con[h] = con_ab;
+    m->con[h + 1] = m->con[h + 2] = 0;
     m->ve[a] = h;
     m->ve[b] = h + 1;
     m->ve[c] = h + 2;
@@ -330,6 +338,9 @@ static wm_status insert_point(mesh *m, int32_t pi)
         return st;
     if (m->ntri + 2 > m->maxtri)
         return wm_fail(m->ctx, WM_ERR_INTERNAL, "cdt: triangle overflow");
+    if (m->state && !m->anywhere && m->state[t] != 2)
+        return wm_fail(m->ctx, WM_ERR_INVALID,
+                       "cdt: point %d not strictly inside", (int)pi);
     m->stack.n = 0;
     if (h < 0)
     {
@@ -338,10 +349,14 @@ static wm_status insert_point(mesh *m, int32_t pi)
         const int32_t a = m->v[h0], b = m->v[h0 + 1], c = m->v[h0 + 2];
         const int32_t oab = m->tw[h0], obc = m->tw[h0 + 1];
         const int32_t oca = m->tw[h0 + 2];
+        const uint8_t cab = m->con[h0], cbc = m->con[h0 + 1];
+        const uint8_t cca = m->con[h0 + 2];
         const int32_t t1 = m->ntri++, t2 = m->ntri++;
-        set_tri(m, t, a, b, pi);
-        set_tri(m, t1, b, c, pi);
-        set_tri(m, t2, c, a, pi);
+        set_tri(m, t, a, b, pi, cab);
+        set_tri(m, t1, b, c, pi, cbc);
+        set_tri(m, t2, c, a, pi, cca);
+        if (m->state)
+            m->state[t1] = m->state[t2] = m->state[t];
         pair_twins(m, 3 * t, oab);
         pair_twins(m, 3 * t1, obc);
         pair_twins(m, 3 * t2, oca);
@@ -360,16 +375,26 @@ static wm_status insert_point(mesh *m, int32_t pi)
         if (g < 0)
             return wm_fail(m->ctx, WM_ERR_INTERNAL,
                            "cdt: point on the super triangle");
+        if (m->con[h])
+            return wm_fail(m->ctx, WM_ERR_INVALID,
+                           "cdt: point %d on a ring edge", (int)pi);
         const int32_t u = m->v[h], v = m->v[nxt(h)], w = m->v[prv(h)];
         const int32_t z = m->v[prv(g)];
         const int32_t owu = m->tw[prv(h)], ovw = m->tw[nxt(h)];
         const int32_t ozv = m->tw[prv(g)], ouz = m->tw[nxt(g)];
+        const uint8_t cwu = m->con[prv(h)], cvw = m->con[nxt(h)];
+        const uint8_t czv = m->con[prv(g)], cuz = m->con[nxt(g)];
         const int32_t ta = h / 3, tc = g / 3;
         const int32_t tb = m->ntri++, td = m->ntri++;
-        set_tri(m, ta, w, u, pi);
-        set_tri(m, tb, v, w, pi);
-        set_tri(m, tc, z, v, pi);
-        set_tri(m, td, u, z, pi);
+        set_tri(m, ta, w, u, pi, cwu);
+        set_tri(m, tb, v, w, pi, cvw);
+        set_tri(m, tc, z, v, pi, czv);
+        set_tri(m, td, u, z, pi, cuz);
+        if (m->state)
+        {
+            m->state[tb] = m->state[ta];
+            m->state[td] = m->state[tc];
+        }
         pair_twins(m, 3 * ta, owu);
         pair_twins(m, 3 * tb, ovw);
         pair_twins(m, 3 * tc, ozv);
@@ -384,7 +409,7 @@ static wm_status insert_point(mesh *m, int32_t pi)
     }
     m->last = t;
     /* each flip adds one edge at p, so p's degree bounds the flips */
-    return lawson(m, 1, (size_t)m->nv + 8);
+    return lawson(m, 1, (size_t)m->np + 8);
 }
 
 static void mark(mesh *m, int32_t h)
@@ -897,7 +922,7 @@ static wm_status check_inside(const mesh *m, const uint8_t *state, size_t nring,
             continue;
         (*inside)++;
         for (size_t i = 0; i < 3; i++)
-            if (m->v[3 * t + i] >= m->nv)
+            if (m->v[3 * t + i] >= m->nv && m->v[3 * t + i] < m->nv + 3)
                 return wm_fail(m->ctx, WM_ERR_INVALID,
                                "cdt: rings are not a polygon with holes");
     }
@@ -951,7 +976,144 @@ static void mesh_free(mesh *m)
     free(m->cav.a);
     free(m->tstk.a);
     free(m->pend.a);
+    free(m->state);
 }
+
+/* Builds the CDT of the rings and the nextra points after them into m
+ * (m->state labels its triangles); *inside: how many are inside. */
+static wm_status build(mesh *m, const wm_pt *pts, const size_t *ring_start,
+                       size_t nrings, size_t nextra, size_t *inside)
+{
+    wm_status st = check_input(pts, ring_start, nrings, nextra, m->ctx);
+    if (st != WM_OK)
+        return st;
+    const size_t nring = ring_start[nrings], n = nring + nextra;
+    const size_t nall = n + 3;
+    const size_t maxtri = 2 * nall - 5; /* hull of 3: 2V - 2 - 3 */
+    m->nv = (int32_t)n;
+    m->np = (int32_t)nall;
+    m->maxtri = (int32_t)maxtri;
+    m->rng = 2463534242u;
+    m->p = alloc_n(nall, sizeof *m->p);
+    m->v = alloc_n(3 * maxtri, sizeof *m->v);
+    m->tw = alloc_n(3 * maxtri, sizeof *m->tw);
+    m->con = alloc_n(3 * maxtri, sizeof *m->con);
+    m->ve = alloc_n(nall, sizeof *m->ve);
+    m->tstamp = calloc(maxtri, sizeof *m->tstamp);
+    m->vstamp = calloc(nall, sizeof *m->vstamp);
+    if (!m->p || !m->v || !m->tw || !m->con || !m->ve || !m->tstamp ||
+        !m->vstamp)
+        return wm_fail(m->ctx, WM_ERR_NOMEM,
+                       "cdt: out of memory (%zu vertices)", n);
+
+    /* points, super triangle, first triangle */
+    memcpy(m->p, pts, n * sizeof *pts);
+    const int32_t s0 = (int32_t)n, s1 = s0 + 1, s2 = s0 + 2;
+    m->p[s0].x = -SUPER_M;
+    m->p[s0].y = -SUPER_M;
+    m->p[s1].x = SUPER_M * 3 + SUPER_M / 2;
+    m->p[s1].y = -SUPER_M;
+    m->p[s2].x = -SUPER_M;
+    m->p[s2].y = SUPER_M * 3 + SUPER_M / 2;
+    m->ntri = 1;
+    set_tri(m, 0, s0, s1, s2, 0);
+    m->tw[0] = m->tw[1] = m->tw[2] = -1;
+    st = insert_points(m, pts, n);
+    if (st != WM_OK)
+        return st;
+
+    /* constraints, ring by ring */
+    for (size_t r = 0; r < nrings; r++)
+    {
+        const size_t b0 = ring_start[r], len = ring_start[r + 1] - b0;
+        for (size_t i = 0; i < len; i++)
+        {
+            st = insert_constraint(m, (int32_t)(b0 + i),
+                                   (int32_t)(b0 + (i + 1) % len));
+            if (st != WM_OK)
+                return st;
+        }
+    }
+
+    const size_t nt = (size_t)m->ntri;
+    uint8_t *state = calloc(maxtri, 1);
+    int32_t *queue = alloc_n(nt, sizeof *queue);
+    if (!state || !queue)
+    {
+        free(state);
+        free(queue);
+        return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+    }
+    st = flood_fill(m, state, queue);
+    free(queue);
+    if (st == WM_OK)
+        st = check_inside(m, state, nring, nrings, nextra, inside);
+    if (st == WM_OK)
+        st = certify(m, state, n);
+    if (st != WM_OK)
+    {
+        free(state);
+        return st;
+    }
+    m->state = state;
+    return WM_OK;
+}
+
+/* The inside triangles of m (*ntris of them), in the caller's vertex
+ * numbers: the input's, then those wm_cdt_insert added; with nb, the twin
+ * of each of their half-edges (as in wm_cdt_open). */
+static wm_status export_tris(const mesh *m, size_t inside, uint32_t **tris,
+                             size_t *ntris, int32_t **nb)
+{
+    uint32_t *out = alloc_n(3 * inside, sizeof *out);
+    int32_t *at = nb ? alloc_n((size_t)m->ntri, sizeof *at) : NULL;
+    int32_t *tw = nb ? alloc_n(3 * inside, sizeof *tw) : NULL;
+    if (!out || (nb && (!at || !tw)))
+    {
+        free(out);
+        free(at);
+        free(tw);
+        return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+    }
+    size_t k = 0;
+    for (size_t t = 0; t < (size_t)m->ntri; t++)
+    {
+        if (m->state[t] != 2)
+            continue;
+        if (at)
+            at[t] = (int32_t)(k / 3);
+        for (size_t i = 0; i < 3; i++)
+        {
+            const int32_t x = m->v[3 * t + i]; /* never a super vertex */
+            out[k++] = (uint32_t)(x < m->nv ? x : x - 3);
+        }
+    }
+    for (size_t t = 0, e = 0; nb && t < (size_t)m->ntri; t++)
+    {
+        if (m->state[t] != 2)
+            continue;
+        for (int32_t i = 0; i < 3; i++, e++)
+        {
+            const int32_t g = m->tw[3 * (int32_t)t + i];
+            tw[e] = g >= 0 && m->state[g / 3] == 2 ? 3 * at[g / 3] + g % 3 : -1;
+        }
+    }
+    free(at);
+    if (nb)
+        *nb = tw;
+    *tris = out;
+    *ntris = inside;
+    return WM_OK;
+}
+
+struct wm_cdt
+{
+    mesh m;
+    size_t inside; /* inside triangles */
+    /* for Euler's count: ring vertices, rings, points strictly inside */
+    size_t nring, nrings, nextra;
+    int stale; /* a ring edge was split since the triangles were labelled */
+};
 
 wm_status wm_cdt_triangulate(const wm_pt *pts, const size_t *ring_start,
                              size_t nrings, uint32_t **tris, size_t *ntris,
@@ -964,112 +1126,217 @@ wm_status wm_cdt_triangulate_ex(const wm_pt *pts, const size_t *ring_start,
                                 size_t nrings, size_t nextra, uint32_t **tris,
                                 size_t *ntris, const wm_ctx *ctx)
 {
-    wm_status st = WM_OK;
-    mesh m;
-    uint8_t *state = NULL;
-    int32_t *queue = NULL;
-    uint32_t *out = NULL;
+    return wm_cdt_open(pts, ring_start, nrings, nextra, NULL, tris, ntris, NULL,
+                       ctx);
+}
 
-    memset(&m, 0, sizeof m);
-    m.ctx = ctx;
+wm_status wm_cdt_open(const wm_pt *pts, const size_t *ring_start, size_t nrings,
+                      size_t nextra, wm_cdt **cdt, uint32_t **tris,
+                      size_t *ntris, int32_t **nb, const wm_ctx *ctx)
+{
+    if (nb)
+        *nb = NULL;
+    if (cdt)
+        *cdt = NULL;
     if (tris)
         *tris = NULL;
     if (ntris)
         *ntris = 0;
     if (!pts || !ring_start || !tris || !ntris || nrings == 0)
         return wm_fail(ctx, WM_ERR_INVALID, "cdt: missing argument");
-    st = check_input(pts, ring_start, nrings, nextra, ctx);
-    if (st != WM_OK)
-        return st;
-
-    const size_t nring = ring_start[nrings], n = nring + nextra;
-    const size_t nall = n + 3;
-    const size_t maxtri = 2 * nall - 5; /* hull of 3: 2V - 2 - 3 */
-    m.nv = (int32_t)n;
-    m.maxtri = (int32_t)maxtri;
-    m.rng = 2463534242u;
-    m.p = alloc_n(nall, sizeof *m.p);
-    m.v = alloc_n(3 * maxtri, sizeof *m.v);
-    m.tw = alloc_n(3 * maxtri, sizeof *m.tw);
-    m.con = alloc_n(3 * maxtri, sizeof *m.con);
-    m.ve = alloc_n(nall, sizeof *m.ve);
-    m.tstamp = calloc(maxtri, sizeof *m.tstamp);
-    m.vstamp = calloc(nall, sizeof *m.vstamp);
-    if (!m.p || !m.v || !m.tw || !m.con || !m.ve || !m.tstamp || !m.vstamp)
-    {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory (%zu vertices)", n);
-        goto cleanup;
-    }
-
-    /* points, super triangle, first triangle */
-    memcpy(m.p, pts, n * sizeof *pts);
-    const int32_t s0 = (int32_t)n, s1 = s0 + 1, s2 = s0 + 2;
-    m.p[s0].x = -SUPER_M;
-    m.p[s0].y = -SUPER_M;
-    m.p[s1].x = SUPER_M * 3 + SUPER_M / 2;
-    m.p[s1].y = -SUPER_M;
-    m.p[s2].x = -SUPER_M;
-    m.p[s2].y = SUPER_M * 3 + SUPER_M / 2;
-    m.ntri = 1;
-    set_tri(&m, 0, s0, s1, s2);
-    m.tw[0] = m.tw[1] = m.tw[2] = -1;
-    st = insert_points(&m, pts, n);
-    if (st != WM_OK)
-        goto cleanup;
-
-    /* constraints, ring by ring */
-    for (size_t r = 0; r < nrings; r++)
-    {
-        const size_t b0 = ring_start[r], len = ring_start[r + 1] - b0;
-        for (size_t i = 0; i < len; i++)
-        {
-            st = insert_constraint(&m, (int32_t)(b0 + i),
-                                   (int32_t)(b0 + (i + 1) % len));
-            if (st != WM_OK)
-                goto cleanup;
-        }
-    }
-
-    const size_t nt = (size_t)m.ntri;
-    size_t inside = 0;
-    state = calloc(nt, 1);
-    queue = alloc_n(nt, sizeof *queue);
-    if (!state || !queue)
-    {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
-        goto cleanup;
-    }
-    st = flood_fill(&m, state, queue);
+    wm_cdt *c = calloc(1, sizeof *c);
+    if (!c)
+        return wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
+    c->m.ctx = ctx;
+    wm_status st = build(&c->m, pts, ring_start, nrings, nextra, &c->inside);
+    c->nring = ring_start[nrings];
+    c->nrings = nrings;
+    c->nextra = nextra;
     if (st == WM_OK)
-        st = check_inside(&m, state, nring, nrings, nextra, &inside);
-    if (st == WM_OK)
-        st = certify(&m, state, n);
-    if (st != WM_OK)
-        goto cleanup;
-
-    out = alloc_n(3 * inside, sizeof *out);
-    if (!out)
-    {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
-        goto cleanup;
-    }
-    size_t k = 0;
-    for (size_t t = 0; t < nt; t++)
-    {
-        if (state[t] != 2)
-            continue;
-        out[k++] = (uint32_t)m.v[3 * t];
-        out[k++] = (uint32_t)m.v[3 * t + 1];
-        out[k++] = (uint32_t)m.v[3 * t + 2];
-    }
-    *tris = out;
-    *ntris = inside;
-    out = NULL;
-
-cleanup:
-    free(out);
-    free(queue);
-    free(state);
-    mesh_free(&m);
+        st = export_tris(&c->m, c->inside, tris, ntris, nb);
+    if (st != WM_OK || !cdt)
+        wm_cdt_free(c);
+    else
+        *cdt = c;
     return st;
+}
+
+/* Room for `add` more vertices and their 2 * add triangles. */
+static int grow(mesh *m, size_t add)
+{
+    const size_t np = (size_t)m->np + add;
+    const size_t nt = (size_t)m->maxtri + 2 * add;
+    if (np > MAX_PTS + 3 || nt > (size_t)INT32_MAX / 3)
+        return 0;
+    void *p = realloc(m->p, np * sizeof *m->p);
+    if (p)
+        m->p = p;
+    void *ve = realloc(m->ve, np * sizeof *m->ve);
+    if (ve)
+        m->ve = ve;
+    void *vs = realloc(m->vstamp, np * sizeof *m->vstamp);
+    if (vs)
+        m->vstamp = vs;
+    void *v = realloc(m->v, 3 * nt * sizeof *m->v);
+    if (v)
+        m->v = v;
+    void *tw = realloc(m->tw, 3 * nt * sizeof *m->tw);
+    if (tw)
+        m->tw = tw;
+    void *con = realloc(m->con, 3 * nt * sizeof *m->con);
+    if (con)
+        m->con = con;
+    void *ts = realloc(m->tstamp, nt * sizeof *m->tstamp);
+    if (ts)
+        m->tstamp = ts;
+    void *state = realloc(m->state, nt);
+    if (state)
+        m->state = state;
+    if (!p || !ve || !vs || !v || !tw || !con || !ts || !state)
+        return 0;
+    memset(m->vstamp + m->np, 0, add * sizeof *m->vstamp);
+    memset(m->tstamp + m->maxtri, 0, 2 * add * sizeof *m->tstamp);
+    m->maxtri = (int32_t)nt;
+    return 1;
+}
+
+/* The vertex number inside the mesh of the caller's vertex x. */
+static int32_t internal(const mesh *m, uint32_t x)
+{
+    return x < (uint32_t)m->nv ? (int32_t)x : (int32_t)x + 3;
+}
+
+/* The half-edge a->b, or -1. */
+static int32_t find_half(const mesh *m, int32_t a, int32_t b)
+{
+    const int32_t h0 = m->ve[a];
+    int32_t h = h0;
+    size_t guard = 0;
+    do
+    {
+        if (m->v[nxt(h)] == b)
+            return h;
+        h = m->tw[prv(h)];
+    } while (h >= 0 && h != h0 && ++guard <= 3 * (size_t)m->ntri);
+    return -1;
+}
+
+/* Labels the triangles inside and outside again and checks their count
+ * (after ring edges were split). */
+static wm_status relabel(wm_cdt *c)
+{
+    mesh *m = &c->m;
+    int32_t *queue = alloc_n((size_t)m->ntri, sizeof *queue);
+    if (!queue)
+        return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+    memset(m->state, 0, (size_t)m->ntri);
+    wm_status st = flood_fill(m, m->state, queue);
+    free(queue);
+    if (st == WM_OK)
+        st = check_inside(m, m->state, c->nring, c->nrings, c->nextra,
+                          &c->inside);
+    c->stale = st != WM_OK;
+    return st;
+}
+
+wm_status wm_cdt_split(wm_cdt *cdt, uint32_t a, uint32_t b, wm_pt p,
+                       uint32_t *q, const wm_ctx *ctx)
+{
+    mesh *m = &cdt->m;
+    m->ctx = ctx;
+    const int32_t ia = internal(m, a), ib = internal(m, b);
+    const int32_t h = ia < m->np && ib < m->np ? find_half(m, ia, ib) : -1;
+    if (h < 0 || !m->con[h])
+        return wm_fail(ctx, WM_ERR_INVALID, "cdt: %u-%u is not a ring edge",
+                       (unsigned)a, (unsigned)b);
+    m->con[h] = 0;
+    if (m->tw[h] >= 0)
+        m->con[m->tw[h]] = 0;
+    cdt->stale = 1;
+    int32_t iq;
+    if (*q == UINT32_MAX)
+    {
+        if (p.x < 0 || p.y < 0 || p.x > WM_LOCAL_MAX || p.y > WM_LOCAL_MAX)
+            return wm_fail(ctx, WM_ERR_INVALID,
+                           "cdt: point (%d, %d) outside the lattice range",
+                           (int)p.x, (int)p.y);
+        if (!grow(m, 1))
+            return wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        iq = m->np++;
+        m->p[iq] = p;
+        m->anywhere = 1;
+        const wm_status st = insert_point(m, iq);
+        m->anywhere = 0;
+        if (st != WM_OK)
+            return st;
+        *q = (uint32_t)(iq - 3);
+    }
+    else
+    {
+        iq = internal(m, *q);
+        if (iq < m->nv + 3 || iq >= m->np || cdt->nextra == 0)
+            return wm_fail(ctx, WM_ERR_INVALID, "cdt: %u is not a point inside",
+                           (unsigned)*q);
+        cdt->nextra--;
+    }
+    cdt->nring++;
+    wm_status st = insert_constraint(m, ia, iq);
+    if (st == WM_OK)
+        st = insert_constraint(m, iq, ib);
+    /* a-b, no longer a constraint, may still be an edge that q's insertion
+     * never tested (q was not in a triangle beside it): Lawson from it */
+    const int32_t hab = st == WM_OK ? find_half(m, ia, ib) : -1;
+    if (hab >= 0 && !m->con[hab])
+    {
+        m->stack.n = 0;
+        if (!ivec_push(&m->stack, hab))
+            return wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        st = lawson(m, 0, 32 * (size_t)m->np + 1024);
+    }
+    return st;
+}
+
+wm_status wm_cdt_insert(wm_cdt *cdt, const wm_pt *pts, size_t n,
+                        uint32_t **tris, size_t *ntris, int32_t **nb,
+                        const wm_ctx *ctx)
+{
+    mesh *m = &cdt->m;
+    m->ctx = ctx;
+    *tris = NULL;
+    *ntris = 0;
+    if (nb)
+        *nb = NULL;
+    if (cdt->stale)
+    {
+        const wm_status st = relabel(cdt);
+        if (st != WM_OK)
+            return st;
+    }
+    for (size_t i = 0; i < n; i++)
+        if (pts[i].x < 0 || pts[i].y < 0 || pts[i].x > WM_LOCAL_MAX ||
+            pts[i].y > WM_LOCAL_MAX)
+            return wm_fail(ctx, WM_ERR_INVALID,
+                           "cdt: point (%d, %d) outside the lattice range",
+                           (int)pts[i].x, (int)pts[i].y);
+    if (!grow(m, n))
+        return wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
+    for (size_t i = 0; i < n; i++)
+    {
+        const int32_t pi = m->np++;
+        m->p[pi] = pts[i];
+        const wm_status st = insert_point(m, pi);
+        if (st != WM_OK)
+            return st;
+        cdt->inside += 2;
+        cdt->nextra++;
+    }
+    return export_tris(m, cdt->inside, tris, ntris, nb);
+}
+
+void wm_cdt_free(wm_cdt *cdt)
+{
+    if (!cdt)
+        return;
+    mesh_free(&cdt->m);
+    free(cdt);
 }

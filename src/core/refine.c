@@ -134,7 +134,16 @@ typedef struct
     /* the current triangulation */
     uint32_t *tris;
     size_t ntris;
-    map64 half;  /* directed edge (a, b) -> 3t + i */
+    /* the triangulation kept between rounds: the next one inserts the
+     * round's Steiner points and ring splits into it */
+    wm_cdt *live;     /* NULL: the next round triangulates from scratch */
+    ibuf live_map;    /* its vertex numbers -> point indices */
+    int32_t *live_of; /* point index -> its vertex number, or -1 (size
+                         live_cap) */
+    size_t live_cap;
+    ibuf cuts;   /* the round's ring splits: (a, b, midpoint) point indices */
+    int32_t *nb; /* per half-edge 3t + i of tris, its twin 3u + j, or -1
+                    across a ring edge */
     map64 redge; /* ring edge {a, b} -> ring position (index into ring) */
     /* the round's changes */
     uint8_t *split;   /* per ring position: its edge splits (size ring.n) */
@@ -429,10 +438,99 @@ static int seed_grid(refiner *r)
 }
 
 static wm_status index_tris(refiner *r);
+static wm_status adopt(refiner *r, uint32_t *t, size_t nt, int32_t *nb);
+
+/* The next round triangulates from scratch (the rings went back to an
+ * earlier state, or the kept triangulation refused a change). */
+static void drop_live(refiner *r)
+{
+    wm_cdt_free(r->live);
+    r->live = NULL;
+    r->cuts.n = 0;
+}
+
+/* Point index x is vertex number v of r->live. */
+static int live_add(refiner *r, int32_t x, uint32_t v)
+{
+    if ((size_t)x >= r->live_cap)
+    {
+        const size_t cap = 2 * (size_t)x + 64;
+        int32_t *p = realloc(r->live_of, cap * sizeof *p);
+        if (!p)
+            return 0;
+        for (size_t i = r->live_cap; i < cap; i++)
+            p[i] = -1;
+        r->live_of = p;
+        r->live_cap = cap;
+    }
+    r->live_of[x] = (int32_t)v;
+    return r->live_map.n == v && ibuf_push(&r->live_map, x);
+}
+
+static int32_t live_vertex(const refiner *r, int32_t x)
+{
+    return (size_t)x < r->live_cap ? r->live_of[x] : -1;
+}
+
+/* Brings r->live up to the current rings and Steiner points: the round's
+ * ring splits, then the Steiner points it lacks. WM_ERR_INVALID when there
+ * is none or it refuses a change (then it is dropped, and the caller
+ * triangulates from scratch, which reports the change as before). */
+static wm_status update_live(refiner *r, const wm_ctx *quiet, uint32_t **t,
+                             size_t *nt, int32_t **nb)
+{
+    if (!r->live)
+        return WM_ERR_INVALID;
+    wm_status st = WM_OK;
+    for (size_t i = 0; i + 2 < r->cuts.n && st == WM_OK; i += 3)
+    {
+        const int32_t a = r->cuts.a[i], b = r->cuts.a[i + 1];
+        const int32_t m = r->cuts.a[i + 2];
+        const int32_t have = live_vertex(r, m);
+        uint32_t q = have < 0 ? UINT32_MAX : (uint32_t)have;
+        st = wm_cdt_split(r->live, (uint32_t)live_vertex(r, a),
+                          (uint32_t)live_vertex(r, b), r->P[m], &q, quiet);
+        if (st == WM_OK && have < 0 && !live_add(r, m, q))
+            st = WM_ERR_NOMEM;
+    }
+    r->cuts.n = 0;
+    wm_pt *in = NULL;
+    size_t k = 0;
+    if (st == WM_OK)
+        in = malloc((r->steiner.n + 1) * sizeof *in);
+    if (st == WM_OK && !in)
+        st = WM_ERR_NOMEM;
+    const uint32_t first = (uint32_t)r->live_map.n;
+    for (size_t i = 0; st == WM_OK && i < r->steiner.n; i++)
+    {
+        const int32_t x = r->steiner.a[i];
+        if (live_vertex(r, x) >= 0)
+            continue;
+        in[k] = r->P[x];
+        if (!live_add(r, x, first + (uint32_t)k++))
+            st = WM_ERR_NOMEM;
+    }
+    if (st == WM_OK)
+        st = wm_cdt_insert(r->live, in, k, t, nt, nb, quiet);
+    free(in);
+    if (st != WM_OK)
+        drop_live(r);
+    return st == WM_ERR_NOMEM ? wm_fail(r->ctx, st, "refine: out of memory")
+                              : st;
+}
 
 /* Triangulates the rings and the Steiner points; indexes the result. */
 static wm_status triangulate(refiner *r)
 {
+    uint32_t *t = NULL;
+    int32_t *nb = NULL;
+    size_t nt = 0;
+    const wm_ctx quiet = {NULL, NULL, r->ctx ? r->ctx->cancel : NULL};
+    wm_status st = update_live(r, &quiet, &t, &nt, &nb);
+    if (st == WM_OK)
+        return adopt(r, t, nt, nb);
+    if (st == WM_ERR_NOMEM)
+        return st;
     const size_t nin = r->ring.n + r->steiner.n;
     wm_pt *in = malloc((nin + 1) * sizeof *in);
     if (!in)
@@ -441,34 +539,46 @@ static wm_status triangulate(refiner *r)
         in[i] = r->P[r->ring.a[i]];
     for (size_t i = 0; i < r->steiner.n; i++)
         in[r->ring.n + i] = r->P[r->steiner.a[i]];
-    uint32_t *t = NULL;
-    size_t nt = 0;
-    const wm_ctx quiet = {NULL, NULL, r->ctx ? r->ctx->cancel : NULL};
-    wm_status st = wm_cdt_triangulate_ex(in, r->rstart, r->nrings, r->steiner.n,
-                                         &t, &nt, &quiet);
+    drop_live(r);
+    st = wm_cdt_open(in, r->rstart, r->nrings, r->steiner.n, &r->live, &t, &nt,
+                     &nb, &quiet);
     free(in);
     if (st != WM_OK)
         return st;
+    for (size_t i = 0; i < r->live_cap; i++)
+        r->live_of[i] = -1;
+    r->live_map.n = 0;
+    for (size_t i = 0; i < nin; i++)
+        if (!live_add(
+                r, i < r->ring.n ? r->ring.a[i] : r->steiner.a[i - r->ring.n],
+                (uint32_t)i))
+        {
+            free(t);
+            free(nb);
+            return wm_fail(r->ctx, WM_ERR_NOMEM, "refine: out of memory");
+        }
+    return adopt(r, t, nt, nb);
+}
+
+/* Takes the triangles t (the live CDT's vertex numbers) and their
+ * neighbours nb as the current triangulation; indexes the ring edges. */
+static wm_status adopt(refiner *r, uint32_t *t, size_t nt, int32_t *nb)
+{
+    free(r->nb);
+    r->nb = nb;
     for (size_t i = 0; i < 3 * nt; i++) /* to point indices */
-        t[i] = (uint32_t)(t[i] < r->ring.n ? r->ring.a[t[i]]
-                                           : r->steiner.a[t[i] - r->ring.n]);
+        t[i] = (uint32_t)r->live_map.a[t[i]];
     free(r->tris);
     r->tris = t;
     r->ntris = nt;
     return index_tris(r);
 }
 
-/* Indexes r->tris (directed edges) and the ring edges. */
+/* Indexes the ring edges. */
 static wm_status index_tris(refiner *r)
 {
-    const uint32_t *t = r->tris;
-    const size_t nt = r->ntris;
-    if (!map_init(&r->half, 3 * nt) || !map_init(&r->redge, r->ring.n))
+    if (!map_init(&r->redge, r->ring.n))
         return wm_fail(r->ctx, WM_ERR_NOMEM, "refine: out of memory");
-    for (size_t h = 0; h < 3 * nt; h++)
-        map_put(&r->half,
-                pair_key((int32_t)t[h], (int32_t)t[h - h % 3 + (h + 1) % 3]),
-                (int64_t)h);
     for (size_t q = 0; q < r->nrings; q++)
     {
         const size_t b0 = r->rstart[q], len = r->rstart[q + 1] - b0;
@@ -563,9 +673,7 @@ static int64_t encroached(const refiner *r, size_t t, wm_pt c)
     size_t tri[4] = {t, t, t, t};
     for (int i = 0; i < 3; i++)
     {
-        const uint32_t *v = r->tris + 3 * t;
-        const int64_t g =
-            map_get(&r->half, pair_key((int32_t)v[(i + 1) % 3], (int32_t)v[i]));
+        const int32_t g = r->nb[3 * t + (size_t)i];
         if (g >= 0)
             tri[i + 1] = (size_t)g / 3;
     }
@@ -623,7 +731,7 @@ static int walk(const refiner *r, size_t t, wm_pt c, size_t *hold,
                 *crossed = pos;
                 return 1;
             }
-            const int64_t g = map_get(&r->half, pair_key(b, a));
+            const int32_t g = r->nb[3 * t + (size_t)i];
             if (g < 0)
                 return 0;
             t = (size_t)g / 3;
@@ -643,12 +751,10 @@ static int walk(const refiner *r, size_t t, wm_pt c, size_t *hold,
  * one batch would crowd them: Ruppert's algorithm inserts one at a time). */
 static void touch(refiner *r, size_t t)
 {
-    const uint32_t *v = r->tris + 3 * t;
     r->touched[t] = 1;
     for (int i = 0; i < 3; i++)
     {
-        const int64_t g =
-            map_get(&r->half, pair_key((int32_t)v[(i + 1) % 3], (int32_t)v[i]));
+        const int32_t g = r->nb[3 * t + (size_t)i];
         if (g >= 0)
             r->touched[g / 3] = 1;
     }
@@ -783,7 +889,10 @@ static int apply_splits(refiner *r)
             /* a new point, or a Steiner point the rounding met; never a
              * ring's vertex */
             if (ok && (r->np > before || ((size_t)im < np0 && !was[im])))
-                ok = ibuf_push(&out, im);
+                ok = ibuf_push(&out, im) &&
+                     ibuf_push(&r->cuts, r->ring.a[b0 + i]) &&
+                     ibuf_push(&r->cuts, r->ring.a[b0 + (i + 1) % len]) &&
+                     ibuf_push(&r->cuts, im);
         }
     }
     free(was);
@@ -815,6 +924,10 @@ static int apply_splits(refiner *r)
 
 static void refiner_free(refiner *r)
 {
+    drop_live(r);
+    free(r->live_map.a);
+    free(r->live_of);
+    free(r->cuts.a);
     free(r->P);
     free(r->ring.a);
     free(r->rstart);
@@ -822,8 +935,7 @@ static void refiner_free(refiner *r)
     free(r->pts.k);
     free(r->pts.v);
     free(r->tris);
-    free(r->half.k);
-    free(r->half.v);
+    free(r->nb);
     free(r->redge.k);
     free(r->redge.v);
     free(r->split);
@@ -890,6 +1002,7 @@ static int save(const refiner *r, saved *s)
 /* Puts the saved rings back (and the Steiner points too with all). */
 static int restore(refiner *r, const saved *s, int all)
 {
+    drop_live(r);
     r->ring.n = 0;
     for (size_t i = 0; i < s->ring.n; i++)
         if (!ibuf_push(&r->ring, s->ring.a[i]))
@@ -990,6 +1103,7 @@ static wm_status rounds(refiner *r, size_t n, double cap, uint32_t **tris,
 /* Starts again from the input rings, without Steiner points. */
 static int reset(refiner *r, const size_t *ring_start, size_t n)
 {
+    drop_live(r);
     r->ring.n = 0;
     for (size_t i = 0; i < n; i++)
         if (!ibuf_push(&r->ring, (int32_t)i))
