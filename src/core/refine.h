@@ -58,7 +58,9 @@ extern "C"
      * room of its diametral circle, so refinement next to the side seldom
      * needs to split it (the extracted shore lies within about a pixel
      * and SIMPLIFY of the inputs'). Rounds of batch
-     * insertion repeat until nothing is bad or a round changes nothing; bounds
+     * insertion (into the triangulation kept from the round before:
+     * wm_cdt_insert, wm_cdt_split) repeat until nothing is bad or a round
+     * changes nothing; bounds
      * on rounds and points stop a run that does not converge (then `left`
      * counts what remains).
      *
