@@ -1065,7 +1065,7 @@ static wm_status rounds(refiner *r, size_t n, double cap, uint32_t **tris,
         if (st != WM_OK)
             break;
         retried = 0;
-        if (!snapshot(r, n, tris, ntris, extra, nextra) || !save(r, &sv))
+        if (!save(r, &sv))
         {
             st = WM_ERR_NOMEM;
             break;
@@ -1095,6 +1095,9 @@ static wm_status rounds(refiner *r, size_t n, double cap, uint32_t **tris,
             break;
         }
     }
+    /* r->tris: the last triangulation the CDT accepted */
+    if (st == WM_OK && !snapshot(r, n, tris, ntris, extra, nextra))
+        st = WM_ERR_NOMEM;
     free(sv.ring.a);
     free(sv.rstart);
     return st;
