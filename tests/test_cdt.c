@@ -795,8 +795,9 @@ static void incremental_batch(int cases)
     wm_rings_free(&tmp);
 }
 
-/* A point inside that becomes a ring vertex (a split at it). */
-static void incremental_existing(void)
+/* A point inside that becomes a ring vertex (a split at it): one inserted
+ * (at_open 0) or one of wm_cdt_open's extra points (at_open 1). */
+static void incremental_existing(int at_open)
 {
     wm_rings r, after;
     memset(&r, 0, sizeof r);
@@ -806,10 +807,14 @@ static void incremental_existing(void)
     uint32_t *tris = NULL;
     size_t nt = 0;
     const wm_pt in[2] = {{50, 1}, {30, 60}};
-    wm_status st =
-        wm_cdt_open(r.pts, r.start, r.nrings, 0, &c, &tris, &nt, NULL, NULL);
+    wm_pt all[6];
+    memcpy(all, r.pts, 4 * sizeof *all);
+    memcpy(all + 4, in, sizeof in);
+    wm_status st = wm_cdt_open(all, r.start, r.nrings, at_open ? 2 : 0, &c,
+                               &tris, &nt, NULL, NULL);
     free(tris);
-    if (st == WM_OK)
+    tris = NULL;
+    if (st == WM_OK && !at_open)
         st = wm_cdt_insert(c, in, 2, &tris, &nt, NULL, NULL);
     free(tris);
     uint32_t q = 4; /* (50, 1) */
@@ -818,7 +823,8 @@ static void incremental_existing(void)
     tris = NULL;
     if (st == WM_OK)
         st = wm_cdt_insert(c, NULL, 0, &tris, &nt, NULL, NULL);
-    TAP_EQ(st, WM_OK, "incremental: a point inside becomes a ring vertex");
+    TAP_EQ(st, WM_OK, "incremental: a point inside (%s) becomes a ring vertex",
+           at_open ? "given to wm_cdt_open" : "inserted");
     /* rings (0,0) (50,1) (100,0) (100,100) (0,100), then (30, 60) */
     const int ring[5][2] = {{0, 0}, {50, 1}, {100, 0}, {100, 100}, {0, 100}};
     for (int k = 0; k < 5; k++)
@@ -962,7 +968,8 @@ int main(void)
     random_batch(1500);
     incremental_batch(getenv("WM_TEST_INC") ? atoi(getenv("WM_TEST_INC"))
                                             : 1500);
-    incremental_existing();
+    incremental_existing(0);
+    incremental_existing(1);
     incremental_invalid();
 
     /* large star-shaped polygons */

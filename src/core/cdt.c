@@ -1221,6 +1221,21 @@ static int32_t find_half(const mesh *m, int32_t a, int32_t b)
     return -1;
 }
 
+/* Whether vertex x is on a ring: a constraint leaves it. */
+static int on_ring(const mesh *m, int32_t x)
+{
+    const int32_t h0 = m->ve[x];
+    int32_t h = h0;
+    size_t guard = 0;
+    do
+    {
+        if (m->con[h] || m->con[prv(h)])
+            return 1;
+        h = m->tw[prv(h)];
+    } while (h >= 0 && h != h0 && ++guard <= 3 * (size_t)m->ntri);
+    return 0;
+}
+
 /* Labels the triangles inside and outside again and checks their count
  * (after ring edges were split). */
 static wm_status relabel(wm_cdt *c)
@@ -1274,7 +1289,8 @@ wm_status wm_cdt_split(wm_cdt *cdt, uint32_t a, uint32_t b, wm_pt p,
     else
     {
         iq = internal(m, *q);
-        if (iq < m->nv + 3 || iq >= m->np || cdt->nextra == 0)
+        if ((iq >= m->nv && iq < m->nv + 3) || iq >= m->np ||
+            cdt->nextra == 0 || on_ring(m, iq))
             return wm_fail(ctx, WM_ERR_INVALID, "cdt: %u is not a point inside",
                            (unsigned)*q);
         cdt->nextra--;
