@@ -885,6 +885,28 @@ static void incremental_invalid(void)
     TAP_EQ(wm_cdt_split(c, 0, 2, m, &q, &ctx), WM_ERR_INVALID,
            "incremental: splitting a diagonal (no ring edge) is refused");
     wm_cdt_free(c);
+    /* a thin clockwise hole whose third vertex lies between edge 4-5 and
+     * that edge's rounded midpoint: re-routed through it, the hole would
+     * turn inside out (counter-clockwise), which no count sees */
+    wm_rings_clear(&r);
+    rect(&r, 0, 0, 300, 300, 1, 0);
+    push(&r, 100, 100);
+    push(&r, 108, 103);
+    push(&r, 103, 101);
+    close_ring(&r);
+    wm_cdt_open(r.pts, r.start, r.nrings, 0, &c, &tris, &nt, NULL, &ctx);
+    free(tris);
+    q = UINT32_MAX;
+    const wm_pt mid = {104, 101};
+    TAP_EQ(wm_cdt_split(c, 4, 5, mid, &q, &ctx), WM_ERR_INVALID,
+           "incremental: a split that turns its ring inside out is refused");
+    wm_cdt_free(c);
+    wm_cdt_open(r.pts, r.start, r.nrings, 0, &c, &tris, &nt, NULL, &ctx);
+    free(tris);
+    q = 99;
+    TAP_EQ(wm_cdt_split(c, 4, 4000000000u, mid, &q, &ctx), WM_ERR_INVALID,
+           "incremental: a vertex number out of range is refused");
+    wm_cdt_free(c);
     wm_rings_free(&r);
 }
 

@@ -1113,6 +1113,12 @@ struct wm_cdt
     /* for Euler's count: ring vertices, rings, points strictly inside */
     size_t nring, nrings, nextra;
     int stale; /* a ring edge was split since the triangles were labelled */
+    /* a split must keep its ring's orientation: twice each ring's signed
+     * area, and the ring of each vertex (caller numbers; -1 off the rings,
+     * ring_cap entries) */
+    wm_i128 *area2;
+    int32_t *ring_of;
+    size_t ring_cap;
 };
 
 wm_status wm_cdt_triangulate(const wm_pt *pts, const size_t *ring_start,
@@ -1152,6 +1158,23 @@ wm_status wm_cdt_open(const wm_pt *pts, const size_t *ring_start, size_t nrings,
     c->nring = ring_start[nrings];
     c->nrings = nrings;
     c->nextra = nextra;
+    if (st == WM_OK && cdt)
+    {
+        c->area2 = malloc(nrings * sizeof *c->area2);
+        c->ring_cap = ring_start[nrings] + nextra + 1;
+        c->ring_of = malloc(c->ring_cap * sizeof *c->ring_of);
+        if (!c->area2 || !c->ring_of)
+            st = wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        for (size_t i = 0; st == WM_OK && i < c->ring_cap; i++)
+            c->ring_of[i] = -1;
+        for (size_t k = 0; st == WM_OK && k < nrings; k++)
+        {
+            const size_t b0 = ring_start[k], len = ring_start[k + 1] - b0;
+            c->area2[k] = wm_ring_area2(pts + b0, len);
+            for (size_t i = b0; i < b0 + len; i++)
+                c->ring_of[i] = (int32_t)k;
+        }
+    }
     if (st == WM_OK)
         st = export_tris(&c->m, c->inside, tris, ntris, nb);
     if (st != WM_OK || !cdt)
@@ -1259,10 +1282,25 @@ wm_status wm_cdt_split(wm_cdt *cdt, uint32_t a, uint32_t b, wm_pt p,
 {
     mesh *m = &cdt->m;
     m->ctx = ctx;
-    const int32_t ia = internal(m, a), ib = internal(m, b);
-    const int32_t h = ia < m->np && ib < m->np ? find_half(m, ia, ib) : -1;
-    if (h < 0 || !m->con[h])
+    const uint32_t nvert = (uint32_t)m->np - 3; /* caller numbers below */
+    const int32_t ia = a < nvert ? internal(m, a) : -1;
+    const int32_t ib = b < nvert ? internal(m, b) : -1;
+    const int32_t h = ia >= 0 && ib >= 0 ? find_half(m, ia, ib) : -1;
+    if (h < 0 || !m->con[h] || a >= cdt->ring_cap || cdt->ring_of[a] < 0)
         return wm_fail(ctx, WM_ERR_INVALID, "cdt: %u-%u is not a ring edge",
+                       (unsigned)a, (unsigned)b);
+    if (*q != UINT32_MAX && *q >= nvert)
+        return wm_fail(ctx, WM_ERR_INVALID, "cdt: no vertex %u", (unsigned)*q);
+    /* a-q-b instead of a-b adds triangle (a, q, b) to the ring's area: it
+     * must keep its sign (a thin ring whose vertices lie between a-b and q
+     * would turn inside out, which no other test sees) */
+    const int32_t ring = cdt->ring_of[a];
+    const wm_pt pq = *q == UINT32_MAX ? p : m->p[internal(m, *q)];
+    const wm_i128 after =
+        cdt->area2[ring] + (wm_i128)wm_orient_det(m->p[ia], pq, m->p[ib]);
+    if (after == 0 || (after > 0) != (cdt->area2[ring] > 0))
+        return wm_fail(ctx, WM_ERR_INVALID,
+                       "cdt: splitting %u-%u turns its ring inside out",
                        (unsigned)a, (unsigned)b);
     m->con[h] = 0;
     if (m->tw[h] >= 0)
@@ -1295,6 +1333,20 @@ wm_status wm_cdt_split(wm_cdt *cdt, uint32_t a, uint32_t b, wm_pt p,
                            (unsigned)*q);
         cdt->nextra--;
     }
+    const uint32_t x = (uint32_t)(iq < m->nv ? iq : iq - 3);
+    if (x >= cdt->ring_cap)
+    {
+        const size_t cap = 2 * (size_t)x + 64;
+        int32_t *ro = realloc(cdt->ring_of, cap * sizeof *ro);
+        if (!ro)
+            return wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        for (size_t i = cdt->ring_cap; i < cap; i++)
+            ro[i] = -1;
+        cdt->ring_of = ro;
+        cdt->ring_cap = cap;
+    }
+    cdt->ring_of[x] = ring;
+    cdt->area2[ring] = after;
     cdt->nring++;
     wm_status st = insert_constraint(m, ia, iq);
     if (st == WM_OK)
@@ -1354,5 +1406,7 @@ void wm_cdt_free(wm_cdt *cdt)
     if (!cdt)
         return;
     mesh_free(&cdt->m);
+    free(cdt->area2);
+    free(cdt->ring_of);
     free(cdt);
 }
