@@ -46,6 +46,16 @@ static void close_ring(wm_rings *r)
         abort();
 }
 
+/* A ring of three points, in their order. */
+static void triangle(wm_rings *r, int ax, int ay, int bx, int by, int cx,
+                     int cy)
+{
+    push(r, ax, ay);
+    push(r, bx, by);
+    push(r, cx, cy);
+    close_ring(r);
+}
+
 /* Axis-aligned rectangle with `extra` collinear points per side, ccw or
  * clockwise. */
 static void rect(wm_rings *r, int x0, int y0, int x1, int y1, int ccw,
@@ -890,10 +900,7 @@ static void incremental_invalid(void)
      * turn inside out (counter-clockwise), which no count sees */
     wm_rings_clear(&r);
     rect(&r, 0, 0, 300, 300, 1, 0);
-    push(&r, 100, 100);
-    push(&r, 108, 103);
-    push(&r, 103, 101);
-    close_ring(&r);
+    triangle(&r, 100, 100, 108, 103, 103, 101);
     wm_cdt_open(r.pts, r.start, r.nrings, 0, &c, &tris, &nt, NULL, &ctx);
     free(tris);
     q = UINT32_MAX;
@@ -1040,10 +1047,7 @@ int main(void)
 
     wm_rings_clear(&r);
     rect(&r, 0, 0, 10, 10, 1, 0);
-    push(&r, 0, 0);
-    push(&r, 3, 5);
-    push(&r, 5, 3);
-    close_ring(&r);
+    triangle(&r, 0, 0, 3, 5, 5, 3);
     expect_invalid("duplicate vertex", &r);
 
     /* the edge (12,15)-(12,0) crosses (0,5)-(20,5); the area is positive */
