@@ -76,6 +76,7 @@ static inline void fc_make_field(wm_field *f, int32_t w, int32_t h,
             f->val[t] = o;
             f->kind[t] = WM_TILE_MIXED;
         }
+    wm_field_index(f);
 }
 
 #endif /* WM_FIELD_CHECK_H */

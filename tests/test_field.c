@@ -80,6 +80,32 @@ static int definition_diff(const wm_scene *s, const wm_field *f, int *deep)
     return bad;
 }
 
+/* How many MIXED tiles of f its list or its rows' bits get wrong: the list
+ * must be every MIXED tile, ascending; bit i of row j's water (near) word
+ * must be v <= 0 (|v| < 1 pixel) at sample (i, j) of the tile. */
+static size_t bits_diff(const wm_field *f)
+{
+    size_t bad = 0, k = 0;
+    for (size_t t = 0; t < (size_t)f->ntx * (size_t)f->nty; t++)
+    {
+        if (f->kind[t] != WM_TILE_MIXED)
+            continue;
+        if (k >= f->mixed || f->mixed_tile[k] != t)
+            return bad + 1;
+        const uint64_t *b = wm_field_bits(f, k++);
+        int ok = 1;
+        for (int j = 0; j < WM_TS1; j++)
+            for (int i = 0; i < WM_TS1; i++)
+            {
+                const float v = f->val[t][j * WM_TS1 + i];
+                ok &= (int)(b[2 * j] >> i & 1) == (v <= 0);
+                ok &= (int)(b[2 * j + 1] >> i & 1) == (fabsf(v) < 1.0f);
+            }
+        bad += !ok;
+    }
+    return bad + (k != f->mixed);
+}
+
 int main(void)
 {
     wm_scene s;
@@ -103,6 +129,8 @@ int main(void)
            "field of block column 0");
     TAP_EQ(wm_field_compute(&s, 64, 0, 65, 129, NULL, &b, NULL), WM_OK,
            "field of block column 1");
+    TAP_OK(a.mixed > 0 && bits_diff(&a) == 0 && bits_diff(&b) == 0,
+           "the MIXED tiles listed, their rows' water and near bits right");
     int diff = fc_shared_column_diff(&a, &b, 64);
     TAP_EQ(diff, 0, "shared border column bit-identical in both blocks");
 

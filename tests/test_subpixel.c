@@ -314,5 +314,35 @@ int main(void)
     TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
     wm_rings_free(&r1);
     wm_scene_free(&s);
+    /* A river 6 px wide whose round end dips 1/32 px below the sample row
+     * y = 10, between the samples (10, 10) and (11, 10): both are land,
+     * 0.013 px from the cap, and the cap crosses their edge twice, 0.86 px
+     * apart. The least radius in reach (3 px) must not rule the edge out;
+     * a lake elsewhere makes its cells' least radius 0, nothing in reach
+     * none at all. */
+    su_init(&s, 128);
+    const double cap[] = {10.5, 12.96875, 10.5, 40};
+    const double pool[] = {80, 80, 90, 80, 90, 90, 80, 90};
+    const int npool = 4;
+    su_river(&s, cap, 2, 3.0);
+    su_lake(&s, pool, &npool, 1);
+    su_finish(&s);
+    TAP_EQ(wm_probe_init(&p, &s, 0, 0), WM_OK, "probe");
+    TAP_OK(wm_probe_min_radius(&p, 0, 0, 12 * WM_Q, 12 * WM_Q) == 3.0 * WM_Q,
+           "least radius near the cap: 3 px");
+    TAP_OK(wm_probe_min_radius(&p, 84 * WM_Q, 84 * WM_Q, 86 * WM_Q,
+                               86 * WM_Q) == 0,
+           "least radius near the lake: 0");
+    TAP_OK(isinf(wm_probe_min_radius(&p, 40 * WM_Q, 100 * WM_Q, 60 * WM_Q,
+                                     120 * WM_Q)),
+           "nothing in reach: infinite");
+    wm_probe_free(&p);
+    TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
+    TAP_OK(vertex_near(&r1, 10.0681 * WM_Q, 10 * WM_Q, 1.0) &&
+               vertex_near(&r1, 10.9319 * WM_Q, 10 * WM_Q, 1.0),
+           "the cap's two crossings of the land edge, exactly");
+    TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
     return TAP_DONE();
 }

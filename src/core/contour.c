@@ -352,11 +352,13 @@ static void mark_links(state *s, const wm_field *f, size_t s0, int32_t c0,
     }
 }
 
-/* The segments of the cells of mixed tile t (tile-major order) that are
- * not ambiguous; hc[0] walks the ambiguous cells, hc[1] the linked ones.
- * Returns 0 when out of memory. */
-static int tile_segments(state *s, const wm_field *f, size_t t, size_t *hc)
+/* The segments of the cells of the k-th mixed tile (tile-major order) that
+ * are not ambiguous; hc[0] walks the ambiguous cells, hc[1] the linked
+ * ones. Returns 0 when out of memory. */
+static int tile_segments(state *s, const wm_field *f, size_t k, size_t *hc)
 {
+    const size_t t = f->mixed_tile[k];
+    const uint64_t *bits = wm_field_bits(f, k);
     const int32_t n = s->n;
     const int32_t c0 = (int32_t)(t % (size_t)f->ntx) * WM_TILE;
     const int32_t r0 = (int32_t)(t / (size_t)f->ntx) * WM_TILE;
@@ -370,11 +372,11 @@ static int tile_segments(state *s, const wm_field *f, size_t t, size_t *hc)
     cells_of_tile(s->hid.cell, s->hid.ncell, t, &hc[0], cmask);
     /* water bits of the tile's sample rows; a cell needs work only where
      * its four corner bits differ */
-    uint64_t below = wm_field_water_bits(f->val[t]);
+    uint64_t below = bits[0];
     for (int32_t r = r0; r < r1; r++)
     {
         const float *row = f->val[t] + (r - r0) * (WM_TILE + 1);
-        const uint64_t above = wm_field_water_bits(row + WM_TILE + 1);
+        const uint64_t above = bits[2 * (r - r0 + 1)];
         uint64_t mixed =
             (below ^ (below >> 1)) | (above ^ (above >> 1)) | (below ^ above);
         mixed &= ((UINT64_C(1) << (c1 - c0)) - 1) & ~cmask[r - r0];
@@ -429,14 +431,14 @@ wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
         goto cleanup;
 
     size_t hc[2] = {0, 0}; /* ambiguous and linked cells of the tiles so far */
-    for (size_t t = 0; t < (size_t)f->ntx * (size_t)f->nty; t++)
+    for (size_t k = 0; k < f->mixed; k++)
     {
         if (wm_cancelled(ctx))
         {
             st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
             goto cleanup;
         }
-        if (f->kind[t] == WM_TILE_MIXED && !tile_segments(&s, f, t, hc))
+        if (!tile_segments(&s, f, k, hc))
             goto nomem;
     }
     const size_t ntileseg = s.nsegs;

@@ -843,6 +843,50 @@ static wm_status build_batch(const work *w, const size_t *tiles, size_t n,
     return WM_OK;
 }
 
+/* The compare and the shift by the lane's index vectorize (a compare, a
+ * variable shift, an OR reduction), where bytes gathered one by one did
+ * not; the row's last sample goes apart (WM_TILE bits fill a word). */
+_Static_assert(WM_TILE <= 32, "a tile row's bits are built in 32 bits");
+
+WM_CLONES static void row_bits(const float *row, uint64_t *b)
+{
+    uint32_t w = 0, nr = 0;
+    for (uint32_t i = 0; i < WM_TILE; i++)
+    {
+        w |= (uint32_t)(row[i] <= 0) << i;
+        nr |= (uint32_t)(fabsf(row[i]) < 1.0f) << i;
+    }
+    b[0] = w | (uint64_t)(row[WM_TILE] <= 0) << WM_TILE;
+    b[1] = nr | (uint64_t)(fabsf(row[WM_TILE]) < 1.0f) << WM_TILE;
+}
+
+/* Appends tile t, MIXED, to f's list and its rows' bits; the caller has
+ * made room for it. */
+static void index_tile(wm_field *f, size_t t)
+{
+    f->mixed_tile[f->mixed] = (uint32_t)t;
+    for (int32_t j = 0; j < TS1; j++)
+        row_bits(f->val[t] + j * TS1, f->bits + (f->mixed * TS1 + j) * 2);
+    f->mixed++;
+}
+
+/* Room in f's list of MIXED tiles and their bits for n more. */
+static int index_room(wm_field *f, size_t n, size_t *cap)
+{
+    if (f->mixed + n <= *cap)
+        return 1;
+    size_t c = *cap;
+    if (!wm_grow((void **)&f->mixed_tile, &c, f->mixed + n,
+                 sizeof *f->mixed_tile))
+        return 0;
+    uint64_t *b = realloc(f->bits, (c * 2 * TS1 + 1) * sizeof *b);
+    if (!b)
+        return 0;
+    f->bits = b;
+    *cap = c;
+    return 1;
+}
+
 /* Keeps the evaluated tile k of a batch as window tile t: uniform when
  * every sample inside the window is +band or -band, else its values, moved
  * to *dst (the next free tile of the slab; advanced). */
@@ -872,7 +916,7 @@ static void store_tile(work *w, size_t t, float *val, float **dst)
     f->val[t] = *dst;
     *dst += TS1 * TS1;
     f->kind[t] = WM_TILE_MIXED;
-    f->mixed++;
+    index_tile(f, t);
 }
 
 /* Tiles per slab of values (at least a batch): about 1 MB. */
@@ -900,6 +944,8 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
     f->ntx = w > 1 ? (w - 2) / WM_TILE + 1 : 1;
     f->nty = h > 1 ? (h - 2) / WM_TILE + 1 : 1;
     const size_t nt = (size_t)f->ntx * (size_t)f->nty;
+    if (nt > UINT32_MAX) /* tiles are numbered in 32 bits */
+        return wm_fail(ctx, WM_ERR_INVALID, "field window too large");
     f->kind = calloc(nt, 1);
     f->val = calloc(nt, sizeof *f->val);
     if (!f->kind || !f->val)
@@ -958,6 +1004,7 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
      * packed down over the uniform ones */
     float *top = NULL;
     size_t room = 0, slabcap = 0; /* tiles left in the current slab */
+    size_t mixcap = 0;            /* room in f->mixed_tile and f->bits */
     for (size_t c0 = 0; c0 < ncand; c0 += batch)
     {
         const size_t n = ncand - c0 < batch ? ncand - c0 : batch;
@@ -987,6 +1034,8 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
         if (st != WM_OK)
             goto failed;
         float *next = top;
+        if (!index_room(f, n, &mixcap))
+            goto nomem;
         for (size_t k = 0; k < n; k++)
             store_tile(&wk, cand[c0 + k], top + k * TS1 * TS1, &next);
         room -= (size_t)(next - top) / (TS1 * TS1);
@@ -1047,17 +1096,25 @@ float wm_field_at(const wm_field *f, int32_t c, int32_t r)
     }
 }
 
-/* The compare and the shift by the lane's index vectorize (a compare, a
- * variable shift, an OR reduction), where bytes gathered one by one did
- * not; the row's last sample goes apart (WM_TILE bits fill a word). */
-_Static_assert(WM_TILE <= 32, "a tile row's bits are built in 32 bits");
-
-WM_CLONES uint64_t wm_field_water_bits(const float *row)
+wm_status wm_field_index(wm_field *f)
 {
-    uint32_t m = 0;
-    for (uint32_t i = 0; i < WM_TILE; i++)
-        m |= (uint32_t)(row[i] <= 0) << i;
-    return m | (uint64_t)(row[WM_TILE] <= 0) << WM_TILE;
+    const size_t nt = (size_t)f->ntx * (size_t)f->nty;
+    if (nt > UINT32_MAX)
+        return WM_ERR_NOMEM; /* tiles are numbered in 32 bits */
+    size_t cap = 0;
+    f->mixed = 0;
+    free(f->mixed_tile);
+    free(f->bits);
+    f->mixed_tile = NULL;
+    f->bits = NULL;
+    for (size_t t = 0; t < nt; t++)
+        if (f->kind[t] == WM_TILE_MIXED)
+        {
+            if (!index_room(f, 1, &cap))
+                return WM_ERR_NOMEM;
+            index_tile(f, t);
+        }
+    return WM_OK;
 }
 
 void wm_field_cell(const wm_field *f, int32_t c, int32_t r, float v[4])
@@ -1095,5 +1152,7 @@ void wm_field_free(wm_field *f)
     free(f->slab);
     free(f->val);
     free(f->kind);
+    free(f->mixed_tile);
+    free(f->bits);
     memset(f, 0, sizeof *f);
 }

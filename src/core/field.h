@@ -42,11 +42,19 @@ extern "C"
                                values live in `slab`) */
         float **slab;     /**< nslab blocks holding the tiles' values (owned) */
         size_t nslab;
-        size_t mixed;     /**< number of MIXED tiles */
-        uint64_t samples; /**< samples evaluated (statistics): on the C path
-                               only the narrow band's, on a device every
-                               sample of a mixed tile */
-        uint64_t pairs;   /**< sample-item distances evaluated (statistics) */
+        size_t mixed;         /**< number of MIXED tiles */
+        uint32_t *mixed_tile; /**< the MIXED tiles, ascending (owned; see
+                                   wm_field_index) */
+        uint64_t *bits;       /**< per MIXED tile, in mixed_tile's order, 2 *
+                                   WM_TS1 words: for each row j of its samples
+                                   the water bits (v <= 0) at [2j] and the near
+                                   bits (|v| < 1 pixel) at [2j + 1], bit i for
+                                   sample i: what marching squares and the
+                                   sub-pixel screen test first (owned) */
+        uint64_t samples;     /**< samples evaluated (statistics): on the C path
+                                   only the narrow band's, on a device every
+                                   sample of a mixed tile */
+        uint64_t pairs; /**< sample-item distances evaluated (statistics) */
     } wm_field;
 
     /** Samples per tile side. */
@@ -125,10 +133,16 @@ extern "C"
      *  tile lookup (a cell lies in one tile). */
     void wm_field_cell(const wm_field *f, int32_t c, int32_t r, float v[4]);
 
-    /** Bit i set where row[i] <= 0 (water), i = 0 .. WM_TILE: one row of a
-     *  tile's samples as the bits that marching squares and the sub-pixel
-     *  screen test. */
-    uint64_t wm_field_water_bits(const float *row);
+    /** Lists f's MIXED tiles and their rows' bits (mixed_tile, bits) from
+     *  `kind` and `val`: wm_field_compute calls it; a field made by hand
+     *  calls it once its values are set. Returns WM_ERR_NOMEM or WM_OK. */
+    wm_status wm_field_index(wm_field *f);
+
+    /** The bits (wm_field.bits) of the k-th MIXED tile. */
+    static inline const uint64_t *wm_field_bits(const wm_field *f, size_t k)
+    {
+        return f->bits + k * 2 * WM_TS1;
+    }
 
     /** Asks the cache for what wm_field_at(f, c, r) will read: a caller
      *  reading scattered samples issues it some samples ahead, so that the

@@ -711,6 +711,44 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
     return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
 }
 
+double wm_probe_min_radius(const wm_probe *p, int32_t x0, int32_t y0,
+                           int32_t x1, int32_t y1)
+{
+    if (p->nsegs == 0 && p->npolys == 0)
+        return INFINITY;
+    const int32_t cx0 = dcell(p, x0), cx1 = dcell(p, x1);
+    const int32_t cy0 = dcell(p, y0), cy1 = dcell(p, y1);
+    if (p->nledge)
+    {
+        if (p->nlwide)
+            return 0;
+        for (int32_t cy = cy0; cy <= cy1; cy++)
+        {
+            size_t b, e;
+            wm_cells_row(&p->lcells, cy, cx0, cx1, &b, &e);
+            if (b < e)
+                return 0;
+        }
+    }
+    double r = INFINITY;
+    for (size_t i = 0; i < p->nwide; i++)
+    {
+        const double ri = p->s->segs[p->wide[i]].r;
+        r = ri < r ? ri : r;
+    }
+    for (int32_t cy = cy0; cy <= cy1; cy++)
+    {
+        size_t b, e;
+        wm_cells_row(&p->cells, cy, cx0, cx1, &b, &e);
+        for (size_t i = b; i < e; i++)
+        {
+            const double ri = p->s->segs[p->cells.item[i]].r;
+            r = ri < r ? ri : r;
+        }
+    }
+    return r;
+}
+
 wm_status wm_probe_init(wm_probe *p, const wm_scene *s, int64_t bx, int64_t by)
 {
     memset(p, 0, sizeof *p);

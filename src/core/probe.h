@@ -112,6 +112,17 @@ extern "C"
     int wm_probe_crossings(wm_probe *p, wm_pt P, int vertical, int32_t L,
                            int cls0, int *cls1, int32_t *off, int max);
 
+    /**
+     * The least radius (lattice units) of the river capsules that may come
+     * within reach of the block-local box [x0, x1] x [y0, y1] (inside the
+     * block square), or 0 when a lake edge may (a lake's corners are
+     * sharp); INFINITY when nothing does. Read from the indexes, which
+     * register an item in every cell its reach touches: a lower bound,
+     * never more than the true least radius.
+     */
+    double wm_probe_min_radius(const wm_probe *p, int32_t x0, int32_t y0,
+                               int32_t x1, int32_t y1);
+
 #ifdef __cplusplus
 }
 #endif

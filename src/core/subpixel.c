@@ -19,7 +19,10 @@
  * boundary may meet it (feasible_near/far). An edge of one class with a
  * feasible part "cannot decide" (with |va| + |vb| > 1 pixel it never can). An
  * edge whose samples differ is "loose" when its feasible part reaches more than
- * LOOSE pixel from the interpolated crossing. A saddle cell cannot decide
+ * LOOSE pixel from the interpolated crossing. An edge of land that cannot
+ * decide is searched only when a capsule may cross it twice
+ * (capsule_may_cross: the squared distance to the capsule's axis along the
+ * edge, less t^2, is concave). A saddle cell cannot decide
  * which diagonal the boundary separates. Their crossings are computed
  * exactly from the inputs (probe.h: capsule and lake intervals along the
  * edge). A cell with a side holding hidden crossings (or three on a
@@ -49,10 +52,11 @@
  * samples differ takes its exact crossing in both; subdivision happens
  * inside cells, which belong to one block.
  *
- * Cost: a few float operations per edge of a mixed tile within a pixel of
- * the boundary; one exact search (the items near the edge) per edge that
- * cannot decide or is loose; subdivision only in ambiguous cells, O(depth)
- * searches per crossing.
+ * Cost: the field's water and near bits per row of a mixed tile, a few
+ * float operations per edge both of whose samples are near; one exact
+ * search (the items near the edge) per edge that cannot decide (and, on
+ * land, that a capsule may cross) or is loose; subdivision only in
+ * ambiguous cells, O(depth) searches per crossing.
  */
 #include "subpixel.h"
 
@@ -209,43 +213,6 @@ static int search_edge(wm_hidden *h, const wm_field *f, wm_probe *probe,
     return add_edge_cells(h, f, c, r, vertical);
 }
 
-/* The bits of one row `a` of a tile's samples (WM_TILE + 1 values) that
- * the screen tests: where v is water and where |v| < 1 pixel (an edge can
- * be undecided or loose only between two such samples); per edge, where
- * |va| + |vb| <= 1 pixel (undecided() may hold) and where it is below
- * 1 - LOOSE (loose() may hold), for the horizontal edges of `a` (h1, h6)
- * and the vertical edges from the row `p` below to `a` (v1, v6). Computed
- * for all columns at once: a compare and a shift by the lane's index per
- * bit vectorize, where a test per edge would not. */
-typedef struct
-{
-    uint64_t water, near, h1, h6, v1, v6;
-} row_bits;
-
-WM_CLONES static void screen_bits(const float *a, const float *p, row_bits *m)
-{
-    uint32_t w = 0, nr = 0, h1 = 0, h6 = 0, v1 = 0, v6 = 0;
-    for (uint32_t i = 0; i < WM_TILE; i++)
-    {
-        const float x = fabsf(a[i]);
-        const float hs = x + fabsf(a[i + 1]), vs = fabsf(p[i]) + x;
-        w |= (uint32_t)(a[i] <= 0) << i;
-        nr |= (uint32_t)(x < 1.0f) << i;
-        h1 |= (uint32_t)(hs <= 1.0f) << i;
-        h6 |= (uint32_t)(hs < 1.0f - LOOSE) << i;
-        v1 |= (uint32_t)(vs <= 1.0f) << i;
-        v6 |= (uint32_t)(vs < 1.0f - LOOSE) << i;
-    }
-    /* the last column: no horizontal edge starts there */
-    const float x = fabsf(a[WM_TILE]), vs = fabsf(p[WM_TILE]) + x;
-    m->water = w | (uint64_t)(a[WM_TILE] <= 0) << WM_TILE;
-    m->near = nr | (uint64_t)(x < 1.0f) << WM_TILE;
-    m->h1 = h1;
-    m->h6 = h6;
-    m->v1 = v1 | (uint64_t)(vs <= 1.0f) << WM_TILE;
-    m->v6 = v6 | (uint64_t)(vs < 1.0f - LOOSE) << WM_TILE;
-}
-
 /* An edge of a tile's sample array, from the sample at a to a + along;
  * across: the stride beside its line. before, after: whether the tile holds
  * the sample before a and the one after a + along on the line; lo, hi: how
@@ -261,8 +228,9 @@ typedef struct
  * at s and those k = 1, 2 rows beside it, each valued v clearing
  * sqrt(v^2 - k^2) of the line on both sides of its foot (the field is
  * 1-Lipschitz and |v| never exceeds the distance to the boundary, in land
- * and in water). */
-static float clear_of(const float *s, const edge_view *e)
+ * and in water). clear_edge() takes the rows the tile holds; clear_of()
+ * goes straight to all four where it holds them (most edges). */
+static float clear_edge(const float *s, const edge_view *e)
 {
     float h2 = s[0] * s[0];
     for (int k = 1; k <= 2; k++)
@@ -274,6 +242,20 @@ static float clear_of(const float *s, const edge_view *e)
                 h2 = e2 > h2 ? e2 : h2;
             }
     return sqrtf(h2);
+}
+
+static inline float clear_of(const float *s, const edge_view *e)
+{
+    if (e->lo < 2 || e->hi < 2)
+        return clear_edge(s, e);
+    const ptrdiff_t d = e->across;
+    const float a = s[0] * s[0];
+    const float b = s[-d] * s[-d] - 1.0f, c = s[d] * s[d] - 1.0f;
+    const float g = s[-2 * d] * s[-2 * d] - 4.0f,
+                h = s[2 * d] * s[2 * d] - 4.0f;
+    const float m1 = a > b ? a : b, m2 = c > g ? c : g;
+    const float m3 = m1 > m2 ? m1 : m2;
+    return sqrtf(m3 > h ? m3 : h);
 }
 
 /* [*L, *U]: the part of the edge (pixels from a) that the balls of the
@@ -302,8 +284,8 @@ static void feasible_far(const edge_view *e, float *L, float *U)
 
 /* Whether an edge whose two samples are of one class cannot decide: some
  * part of it is feasible (with a margin of 1/1000 pixel for the float
- * values). With |va| + |vb| > 1 pixel it never is: the screen's bits leave
- * those out. */
+ * values). With |va| + |vb| > 1 pixel it never is: screen() leaves those
+ * out. */
 static int undecided(const edge_view *e)
 {
     float L, U;
@@ -319,7 +301,7 @@ static int undecided(const edge_view *e)
  * straight boundary leaves a short feasible part around the interpolated
  * point; a thin feature (the far side of a stream narrower than a pixel,
  * the land between two rivers) a long one. With |va| + |vb| >= 1 - LOOSE
- * it never does: the screen's bits leave those out. */
+ * it never does: screen() leaves those out. */
 static int loose(const edge_view *e)
 {
     const float va = fabsf(e->a[0]), vb = fabsf(e->a[e->along]);
@@ -330,6 +312,29 @@ static int loose(const edge_view *e)
         return 0;
     feasible_far(e, &L, &U);
     return p - L > LOOSE || U - p > LOOSE;
+}
+
+/* Whether a river capsule of radius r pixels or more may cross twice the
+ * edge from a to b, whose samples are land valued va and vb. Water meets
+ * such an edge only where one item crosses it twice (the item holding the
+ * water just past where the water begins on the edge holds neither end);
+ * a capsule is its axis grown by r, and its axis lies at least va + r from
+ * a and vb + r from b. For any set, the squared distance from the point
+ * t along the edge less t^2 is concave in t (a minimum of functions
+ * linear in t), so the squared distance to the axis there is at least
+ * (1 - t)(va + r)^2 + t (vb + r)^2 - t (1 - t); the capsule reaches the
+ * edge only where that falls to r^2. This bound grows with r, so the least
+ * radius in reach decides for every capsule (a lake's sharp corners have
+ * none: r = 0 leaves only the samples' balls, undecided()). The values
+ * are taken 1/1000 pixel smaller, the margin undecided() allows. */
+static int capsule_may_cross(float va, float vb, double r)
+{
+    const double a = (va > 0.001f ? va - 0.001 : 0) + r;
+    const double b = (vb > 0.001f ? vb - 0.001 : 0) + r;
+    const double A = a * a, B = b * b;
+    const double t0 = (A - B + 1) / 2; /* where the bound is least */
+    const double t = t0 < 0 ? 0 : (t0 > 1 ? 1 : t0);
+    return (1 - t) * A + t * B - t * (1 - t) <= r * r;
 }
 
 /* Cell (c, r) of key k. */
@@ -759,7 +764,9 @@ static int link_cells(wm_hidden *h, const wm_field *f)
 typedef struct
 {
     const float *v;
+    const uint64_t *bits; /* its rows' water and near bits (wm_field.bits) */
     int32_t c0, r0, c1, r1, n;
+    double rmin; /* least capsule radius in reach, pixels (< 0: not yet) */
 } tile;
 
 /* Edge from sample (c0 + q, r) of T along x or y. */
@@ -784,27 +791,51 @@ static edge_view view_of(const tile *T, int32_t q, int32_t r, int vertical)
                        T->r1 - r};
 }
 
-/* Screens the edges of row r of T at the columns set in m: along x or y,
- * whose samples are of one class (kind 0: searched when they cannot
- * decide) or differ (kind 1: searched when loose, and always on the block
- * square, so that the two blocks sharing it take the same crossing). */
-static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe,
-                  const tile *T, int32_t r, uint64_t m, int vertical, int kind)
+/* Whether the land edge e of tile T may hold water (capsule_may_cross
+ * with the least radius of the rivers in reach of T). */
+static int land_may_cross(const wm_probe *probe, tile *T, const edge_view *e)
 {
+    /* a capsule meeting the tile's last row or column comes within reach
+     * of the point a unit before it: the tile's own index cells do */
+    if (T->rmin < 0)
+        T->rmin = wm_probe_min_radius(probe, T->c0 * WM_Q, T->r0 * WM_Q,
+                                      T->c1 * WM_Q - 1, T->r1 * WM_Q - 1) /
+                  WM_Q;
+    return capsule_may_cross(e->a[0], e->a[e->along], T->rmin);
+}
+
+/* Screens the edges of row r of T at the columns set in m (both samples
+ * near): along x or y, whose samples are of one class (kind 0: searched
+ * when they cannot decide, and for land when a capsule may cross them) or
+ * differ (kind 1: searched when loose, and always on the block square, so
+ * that the two blocks sharing it take the same crossing). The sum of the
+ * two values rules most out before the feet beside are read. */
+static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe, tile *T,
+                  int32_t r, uint64_t m, int vertical, int kind)
+{
+    const float *row = T->v + (ptrdiff_t)(r - T->r0) * (WM_TILE + 1);
+    const ptrdiff_t along = vertical ? WM_TILE + 1 : 1;
     while (m)
     {
         const int32_t q = __builtin_ctzll(m);
         m &= m - 1;
         const int32_t c = T->c0 + q;
-        const edge_view e = view_of(T, q, r, vertical);
+        const float sum = fabsf(row[q]) + fabsf(row[q + along]);
         if (kind == 0)
         {
+            if (sum > 1.0f)
+                continue;
+            const edge_view e = view_of(T, q, r, vertical);
             if (undecided(&e) &&
+                (e.a[0] <= 0 || land_may_cross(probe, T, &e)) &&
                 !search_edge(h, f, probe, c, r, vertical, e.a[0] <= 0))
                 return 0;
             continue;
         }
         const int sq = vertical ? c == 0 || c == T->n : r == 0 || r == T->n;
+        if (!sq && sum >= 1.0f - LOOSE)
+            continue;
+        const edge_view e = view_of(T, q, r, vertical);
         if ((sq || loose(&e)) && !loose_edge(h, f, probe, c, r, vertical))
             return 0;
     }
@@ -816,7 +847,7 @@ static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe,
  * those of two that are loose) and the saddle cells (corners alternate:
  * which diagonal the boundary separates is an exact question). */
 static int screen_tile(wm_hidden *h, const wm_field *f, wm_probe *probe,
-                       const tile *T)
+                       tile *T)
 {
     /* a tile screens its edges but those of its top row and right column,
      * which the tile beyond screens (it is mixed too: an edge within a
@@ -826,38 +857,28 @@ static int screen_tile(wm_hidden *h, const wm_field *f, wm_probe *probe,
     const int32_t ce = T->c1 == T->n ? T->c1 : T->c1 - 1;
     const uint64_t hcols = (UINT64_C(1) << (T->c1 - T->c0)) - 1;
     const uint64_t vcols = (UINT64_C(1) << (ce - T->c0 + 1)) - 1;
-    /* the rows and columns of edges on the block square */
-    const uint64_t vsq = (T->c0 == 0 ? 1 : 0) |
-                         (T->c1 == T->n ? UINT64_C(1) << (T->n - T->c0) : 0);
-    row_bits cur, up_row = {0, 0, 0, 0, 0, 0};
-    screen_bits(T->v, T->v, &cur); /* (its vertical bits are not used) */
     for (int32_t r = T->r0; r <= re; r++)
     {
         const int up = r < T->r1;
-        if (up)
-            screen_bits(T->v + (ptrdiff_t)(r - T->r0 + 1) * (WM_TILE + 1),
-                        T->v + (ptrdiff_t)(r - T->r0) * (WM_TILE + 1), &up_row);
-        const uint64_t hsq = r == 0 || r == T->n ? ~UINT64_C(0) : 0;
-        /* horizontal edges of row r, vertical ones up from it */
-        const uint64_t hn = cur.near & (cur.near >> 1) & hcols;
-        const uint64_t hx = cur.water ^ (cur.water >> 1);
-        const uint64_t vn = up ? cur.near & up_row.near & vcols : 0;
-        const uint64_t vx = cur.water ^ up_row.water;
-        const uint64_t saddle = up ? hx & ~(cur.water ^ (up_row.water >> 1)) &
-                                         ~((cur.water >> 1) ^ up_row.water) &
-                                         hcols
+        const uint64_t *cur = T->bits + 2 * (r - T->r0); /* water, near */
+        const uint64_t above[2] = {up ? cur[2] : 0, up ? cur[3] : 0};
+        /* horizontal edges of row r, vertical ones up from it, both of
+         * whose samples are near */
+        const uint64_t hn = cur[1] & (cur[1] >> 1) & hcols;
+        const uint64_t hx = cur[0] ^ (cur[0] >> 1);
+        const uint64_t vn = cur[1] & above[1] & vcols;
+        const uint64_t vx = cur[0] ^ above[0];
+        const uint64_t saddle = up ? hx & ~(cur[0] ^ (above[0] >> 1)) &
+                                         ~((cur[0] >> 1) ^ above[0]) & hcols
                                    : 0;
         /* same class (kind 0) and differing (kind 1), along x and y */
-        const uint64_t edges[4] = {hn & ~hx & cur.h1, vn & ~vx & up_row.v1,
-                                   hn & hx & (cur.h6 | hsq),
-                                   vn & vx & (up_row.v6 | vsq)};
-        for (int k = 0; k < 4; k++)
+        const uint64_t edges[4] = {hn & ~hx, vn & ~vx, hn & hx, vn & vx};
+        for (int k = 0; (hn | vn) && k < 4; k++)
             if (edges[k] && !screen(h, f, probe, T, r, edges[k], k & 1, k >> 1))
                 return 0;
         for (uint64_t m = saddle; m; m &= m - 1)
             if (!add_cell(h, f, T->c0 + __builtin_ctzll(m), r))
                 return 0;
-        cur = up_row;
     }
     return 1;
 }
@@ -867,27 +888,27 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
 {
     const int32_t n = f->w - 1;
     memset(h, 0, sizeof *h);
-    for (int32_t ty = 0; ty < f->nty; ty++)
-        for (int32_t tx = 0; tx < f->ntx; tx++)
+    for (size_t k = 0; k < f->mixed; k++)
+    {
+        const size_t t = f->mixed_tile[k];
+        const int32_t c0 = (int32_t)(t % (size_t)f->ntx) * WM_TILE;
+        const int32_t r0 = (int32_t)(t / (size_t)f->ntx) * WM_TILE;
+        tile T = {f->val[t],
+                  wm_field_bits(f, k),
+                  c0,
+                  r0,
+                  c0 + WM_TILE < n ? c0 + WM_TILE : n,
+                  r0 + WM_TILE < n ? r0 + WM_TILE : n,
+                  n,
+                  -1};
+        if (wm_cancelled(ctx))
         {
-            const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
-            if (f->kind[t] != WM_TILE_MIXED)
-                continue;
-            const int32_t c0 = tx * WM_TILE, r0 = ty * WM_TILE;
-            const tile T = {f->val[t],
-                            c0,
-                            r0,
-                            c0 + WM_TILE < n ? c0 + WM_TILE : n,
-                            r0 + WM_TILE < n ? r0 + WM_TILE : n,
-                            n};
-            if (wm_cancelled(ctx))
-            {
-                wm_hidden_free(h);
-                return wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
-            }
-            if (!screen_tile(h, f, probe, &T))
-                goto nomem;
+            wm_hidden_free(h);
+            return wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
         }
+        if (!screen_tile(h, f, probe, &T))
+            goto nomem;
+    }
     const wm_status st = wm_corners_find(probe, f, ctx);
     if (st != WM_OK)
     {
