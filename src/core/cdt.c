@@ -116,6 +116,25 @@ typedef struct
     ivec pend;       /* (new half-edge, old half-edge, old twin) triples */
 } mesh;
 
+/* The vertex number inside the mesh of the caller's vertex x, and the
+ * caller's number of mesh vertex x (not a super vertex): the three super
+ * vertices sit between the polygon's vertices and the points added. */
+static int32_t internal(const mesh *m, uint32_t x)
+{
+    return x < (uint32_t)m->nv ? (int32_t)x : (int32_t)x + 3;
+}
+
+static uint32_t external(const mesh *m, int32_t x)
+{
+    return (uint32_t)(x < m->nv ? x : x - 3);
+}
+
+/* Whether p lies in the lattice range the predicates are exact over. */
+static int in_range(wm_pt p)
+{
+    return p.x >= 0 && p.y >= 0 && p.x <= WM_LOCAL_MAX && p.y <= WM_LOCAL_MAX;
+}
+
 static int ivec_push(ivec *s, int32_t x)
 {
     if (s->n == s->cap)
@@ -810,8 +829,7 @@ static wm_status check_input(const wm_pt *pts, const size_t *rs, size_t nrings,
         return wm_fail(ctx, WM_ERR_NOMEM, "cdt: too many vertices (%zu)", n);
     for (size_t i = 0; i < n; i++)
     {
-        if (pts[i].x < 0 || pts[i].x > WM_LOCAL_MAX || pts[i].y < 0 ||
-            pts[i].y > WM_LOCAL_MAX)
+        if (!in_range(pts[i]))
             return wm_fail(ctx, WM_ERR_INVALID,
                            "cdt: vertex %zu (%d, %d) out of range", i,
                            (int)pts[i].x, (int)pts[i].y);
@@ -1085,7 +1103,7 @@ static wm_status export_tris(const mesh *m, size_t inside, uint32_t **tris,
         for (size_t i = 0; i < 3; i++)
         {
             const int32_t x = m->v[3 * t + i]; /* never a super vertex */
-            out[k++] = (uint32_t)(x < m->nv ? x : x - 3);
+            out[k++] = external(m, x);
         }
     }
     for (size_t t = 0, e = 0; nb && t < (size_t)m->ntri; t++)
@@ -1223,12 +1241,6 @@ static int grow(mesh *m, size_t add)
     return 1;
 }
 
-/* The vertex number inside the mesh of the caller's vertex x. */
-static int32_t internal(const mesh *m, uint32_t x)
-{
-    return x < (uint32_t)m->nv ? (int32_t)x : (int32_t)x + 3;
-}
-
 /* The half-edge a->b, or -1. */
 static int32_t find_half(const mesh *m, int32_t a, int32_t b)
 {
@@ -1309,7 +1321,7 @@ wm_status wm_cdt_split(wm_cdt *cdt, uint32_t a, uint32_t b, wm_pt p,
     int32_t iq;
     if (*q == UINT32_MAX)
     {
-        if (p.x < 0 || p.y < 0 || p.x > WM_LOCAL_MAX || p.y > WM_LOCAL_MAX)
+        if (!in_range(p))
             return wm_fail(ctx, WM_ERR_INVALID,
                            "cdt: point (%d, %d) outside the lattice range",
                            (int)p.x, (int)p.y);
@@ -1322,7 +1334,7 @@ wm_status wm_cdt_split(wm_cdt *cdt, uint32_t a, uint32_t b, wm_pt p,
         m->anywhere = 0;
         if (st != WM_OK)
             return st;
-        *q = (uint32_t)(iq - 3);
+        *q = external(m, iq);
     }
     else
     {
@@ -1333,19 +1345,8 @@ wm_status wm_cdt_split(wm_cdt *cdt, uint32_t a, uint32_t b, wm_pt p,
                            (unsigned)*q);
         cdt->nextra--;
     }
-    const uint32_t x = (uint32_t)(iq < m->nv ? iq : iq - 3);
-    if (x >= cdt->ring_cap)
-    {
-        const size_t cap = 2 * (size_t)x + 64;
-        int32_t *ro = realloc(cdt->ring_of, cap * sizeof *ro);
-        if (!ro)
-            return wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
-        for (size_t i = cdt->ring_cap; i < cap; i++)
-            ro[i] = -1;
-        cdt->ring_of = ro;
-        cdt->ring_cap = cap;
-    }
-    cdt->ring_of[x] = ring;
+    if (!wm_map_set(&cdt->ring_of, &cdt->ring_cap, external(m, iq), ring))
+        return wm_fail(ctx, WM_ERR_NOMEM, "cdt: out of memory");
     cdt->area2[ring] = after;
     cdt->nring++;
     wm_status st = insert_constraint(m, ia, iq);
@@ -1381,8 +1382,7 @@ wm_status wm_cdt_insert(wm_cdt *cdt, const wm_pt *pts, size_t n,
             return st;
     }
     for (size_t i = 0; i < n; i++)
-        if (pts[i].x < 0 || pts[i].y < 0 || pts[i].x > WM_LOCAL_MAX ||
-            pts[i].y > WM_LOCAL_MAX)
+        if (!in_range(pts[i]))
             return wm_fail(ctx, WM_ERR_INVALID,
                            "cdt: point (%d, %d) outside the lattice range",
                            (int)pts[i].x, (int)pts[i].y);

@@ -68,6 +68,17 @@ int wm_grow(void **buf, size_t *cap, size_t need, size_t elem)
     return 1;
 }
 
+int wm_map_set(int32_t **map, size_t *cap, size_t i, int32_t v)
+{
+    const size_t old = *cap;
+    if (i == SIZE_MAX || !wm_grow((void **)map, cap, i + 1, sizeof **map))
+        return 0;
+    for (size_t k = old; k < *cap; k++)
+        (*map)[k] = -1;
+    (*map)[i] = v;
+    return 1;
+}
+
 int wm_push(void **buf, size_t *n, size_t *cap, const void *item, size_t elem)
 {
     if (!wm_grow(buf, cap, *n + 1, elem))

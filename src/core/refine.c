@@ -452,19 +452,8 @@ static void drop_live(refiner *r)
 /* Point index x is vertex number v of r->live. */
 static int live_add(refiner *r, int32_t x, uint32_t v)
 {
-    if ((size_t)x >= r->live_cap)
-    {
-        const size_t cap = 2 * (size_t)x + 64;
-        int32_t *p = realloc(r->live_of, cap * sizeof *p);
-        if (!p)
-            return 0;
-        for (size_t i = r->live_cap; i < cap; i++)
-            p[i] = -1;
-        r->live_of = p;
-        r->live_cap = cap;
-    }
-    r->live_of[x] = (int32_t)v;
-    return r->live_map.n == v && ibuf_push(&r->live_map, x);
+    return wm_map_set(&r->live_of, &r->live_cap, (size_t)x, (int32_t)v) &&
+           r->live_map.n == v && ibuf_push(&r->live_map, x);
 }
 
 static int32_t live_vertex(const refiner *r, int32_t x)

@@ -139,6 +139,14 @@ extern "C"
                 size_t elem);
 
     /**
+     * Sets (*map)[i] = v in a map of capacity *cap whose unset entries are
+     * -1, growing it as wm_grow does (the new entries unset).
+     *
+     * @return 1, or 0 when out of memory (the map is left as it was)
+     */
+    int wm_map_set(int32_t **map, size_t *cap, size_t i, int32_t v);
+
+    /**
      * Items by cell of a side x side grid, only the occupied cells stored:
      * building and memory grow with the (cell, item) pairs, not with the
      * grid's area. Invariants once indexed: the occupied cells of row y are
