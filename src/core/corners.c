@@ -209,28 +209,31 @@ static void prim_box(const prim *p, double *b)
     b[3] = fmax(p->y0, p->y1);
 }
 
-wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
+/* The work of wm_corners_find. */
+typedef struct
 {
-    wm_status st = WM_OK;
-    prim *pr = NULL;
-    size_t npr = 0, prcap = 0;
-    wm_cells pg;       /* primitives by cell */
-    double *pb = NULL; /* their boxes */
-    memset(&pg, 0, sizeof pg);
-    hit_pt *cand = NULL; /* primitive crossings, then the kept ones */
-    size_t ncand = 0, candcap = 0, nkept = 0;
-    wm_probe *in = probe;
+    wm_probe *in;
+    const wm_ctx *ctx;
+    double lo, hi; /* the block grown by 4 px, local lattice units */
+    int32_t S;     /* the block's side */
+    prim *pr;      /* primitives */
+    size_t npr, prcap;
+    wm_cells pg; /* primitives by cell */
+    double *pb;  /* their boxes */
+    int64_t cmin;
+    hit_pt *cand; /* primitive crossings, then the kept ones */
+    size_t ncand, candcap;
+} finder;
+
+/* Cells of the candidates' grid. */
+#define PC (16.0 * WM_Q)
+
+/* Step 1a: each river segment's offset lines and end circles (a circle
+ * two consecutive segments share taken once). */
+static int river_prims(finder *cf)
+{
+    const wm_probe *in = cf->in;
     const wm_scene *s = in->s;
-
-    if (in->corners_found)
-        return WM_OK;
-    in->corners_found = 1;
-    if (in->nsegs + in->npolys < 1)
-        return WM_OK;
-    const int32_t S = s->n * WM_Q;
-
-    /* 1. primitives, local doubles */
-    const double lo = -4.0 * WM_Q, hi = (double)S + 4.0 * WM_Q;
     for (size_t i = 0; i < in->nsegs; i++)
     {
         const wm_river_seg *q = &s->segs[in->segs[i]];
@@ -256,15 +259,24 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
          * the primitives of both, as the two copies did) */
         const wm_river_seg *prev = i > 0 ? &s->segs[in->segs[i - 1]] : NULL;
         if (prev && prev->bx == q->ax && prev->by == q->ay && prev->r == q->r)
-            pr[npr - 1].item = NO_ITEM;
+            cf->pr[cf->npr - 1].item = NO_ITEM;
         else
             p[np++] = river_prim(ax, ay, q->r, 0, 1, it, sl);
         if (l > 0)
             p[np++] = river_prim(bx2, by2, q->r, 0, 2, it, sl);
         for (int k = 0; k < np; k++)
-            if (!wm_push((void **)&pr, &npr, &prcap, &p[k], sizeof *p))
-                goto nomem;
+            if (!wm_push((void **)&cf->pr, &cf->npr, &cf->prcap, &p[k],
+                         sizeof *p))
+                return 0;
     }
+    return 1;
+}
+
+/* Step 1b: the lake edges whose box meets the grown block. */
+static int lake_prims(finder *cf)
+{
+    const wm_probe *in = cf->in;
+    const wm_scene *s = in->s;
     for (size_t k = 0; k < in->npolys; k++)
     {
         const uint32_t pidx = in->polys[k];
@@ -281,121 +293,135 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
                       pidx};
             double b[4];
             prim_box(&p, b);
-            if (b[2] < lo || b[0] > hi || b[3] < lo || b[1] > hi)
+            if (b[2] < cf->lo || b[0] > cf->hi || b[3] < cf->lo ||
+                b[1] > cf->hi)
                 continue;
-            if (!wm_push((void **)&pr, &npr, &prcap, &p, sizeof p))
-                goto nomem;
+            if (!wm_push((void **)&cf->pr, &cf->npr, &cf->prcap, &p, sizeof p))
+                return 0;
         }
     }
-    if (npr >= NO_ITEM || s->nsegs + s->nedges >= NO_ITEM)
-        goto cleanup; /* items and primitives need 32 bits */
+    return 1;
+}
 
-    /* 2. candidates: pairs sharing a grid cell (cells over the block grown
-     * by 4 px), found once (in the cell holding the intersection) */
-    const double PC = 16.0 * WM_Q;
-    const int64_t cmin = (int64_t)floor(lo / PC);
-    const int64_t cside = (int64_t)floor(hi / PC) - cmin + 1;
-    wm_cells_reset(&pg, (int32_t)cside);
-    pb = malloc((4 * npr + 1) * sizeof *pb);
-    if (!pb)
-        goto nomem;
-    for (size_t i = 0; i < npr; i++)
+/* Step 2a: the primitives' boxes, and the primitives by cell of the grid
+ * over the grown block. */
+static int bucket(finder *cf)
+{
+    const double lo = cf->lo, hi = cf->hi;
+    cf->cmin = (int64_t)floor(lo / PC);
+    const int64_t cside = (int64_t)floor(hi / PC) - cf->cmin + 1;
+    wm_cells_reset(&cf->pg, (int32_t)cside);
+    cf->pb = malloc((4 * cf->npr + 1) * sizeof *cf->pb);
+    if (!cf->pb)
+        return 0;
+    for (size_t i = 0; i < cf->npr; i++)
     {
-        prim_box(&pr[i], pb + 4 * i);
-        double b[4];
-        b[0] = fmax(pb[4 * i], lo);
-        b[1] = fmax(pb[4 * i + 1], lo);
-        b[2] = fmin(pb[4 * i + 2], hi);
-        b[3] = fmin(pb[4 * i + 3], hi);
+        double *pb = cf->pb + 4 * i;
+        prim_box(&cf->pr[i], pb);
+        const double b[4] = {fmax(pb[0], lo), fmax(pb[1], lo), fmin(pb[2], hi),
+                             fmin(pb[3], hi)};
         if (b[0] > b[2] || b[1] > b[3])
             continue;
-        const int32_t x0 = (int32_t)((int64_t)floor(b[0] / PC) - cmin);
-        const int32_t x1 = (int32_t)((int64_t)floor(b[2] / PC) - cmin);
-        const int32_t y0 = (int32_t)((int64_t)floor(b[1] / PC) - cmin);
-        const int32_t y1 = (int32_t)((int64_t)floor(b[3] / PC) - cmin);
+        const int32_t x0 = (int32_t)((int64_t)floor(b[0] / PC) - cf->cmin);
+        const int32_t x1 = (int32_t)((int64_t)floor(b[2] / PC) - cf->cmin);
+        const int32_t y0 = (int32_t)((int64_t)floor(b[1] / PC) - cf->cmin);
+        const int32_t y1 = (int32_t)((int64_t)floor(b[3] / PC) - cf->cmin);
         for (int32_t cy = y0; cy <= y1; cy++)
             for (int32_t cx = x0; cx <= x1; cx++)
-                if (!wm_cells_add(&pg, cx, cy, (uint32_t)i))
-                    goto nomem;
+                if (!wm_cells_add(&cf->pg, cx, cy, (uint32_t)i))
+                    return 0;
     }
-    if (wm_cells_index(&pg) != WM_OK)
-        goto nomem;
-    for (int32_t row = 0; row < pg.side; row++)
-        for (size_t cell = pg.row[row]; cell < pg.row[row + 1]; cell++)
+    return wm_cells_index(&cf->pg) == WM_OK;
+}
+
+/* Step 2b: the crossings of primitives i and j that lie in grid cell
+ * (cx, cy) (so that a pair sharing cells is found once) and strictly
+ * inside the block, added to the candidates. */
+static int pair_hits(finder *cf, uint32_t i, uint32_t j, int64_t cx, int64_t cy)
+{
+    const prim *p = &cf->pr[i], *q = &cf->pr[j];
+    if (p->item == q->item && p->item != NO_ITEM)
+        return 1;
+    /* with a circle, boxes apart by more than any rounding give no hit; two
+     * nearly parallel lines may (their crossing is noise, far off), and
+     * are kept as they were */
+    const double *bp = cf->pb + 4 * i, *bq = cf->pb + 4 * j;
+    if ((p->circle || q->circle) && (bp[0] > bq[2] + 4 || bq[0] > bp[2] + 4 ||
+                                     bp[1] > bq[3] + 4 || bq[1] > bp[3] + 4))
+        return 1;
+    dpt hit[2];
+    const int nh = intersect(p, q, hit);
+    for (int h = 0; h < nh; h++)
+    {
+        /* the crossing lies in both boxes; rounding may put it a few ulps
+         * out, into a cell the pair does not share, where it would never
+         * be seen */
+        hit[h].x = fmin(fmax(hit[h].x, fmax(bp[0], bq[0])), fmin(bp[2], bq[2]));
+        hit[h].y = fmin(fmax(hit[h].y, fmax(bp[1], bq[1])), fmin(bp[3], bq[3]));
+        if (floor(hit[h].x / PC) != (double)cx ||
+            floor(hit[h].y / PC) != (double)cy)
+            continue;
+        if (!(hit[h].x >= 1 && hit[h].x <= cf->S - 1 && hit[h].y >= 1 &&
+              hit[h].y <= cf->S - 1))
+            continue; /* strictly inside the block */
+        const hit_pt c = {{round_pos(hit[h].x), round_pos(hit[h].y)},
+                          joint(cf->in, p, q)};
+        if (!wm_push((void **)&cf->cand, &cf->ncand, &cf->candcap, &c,
+                     sizeof c))
+            return 0;
+    }
+    return 1;
+}
+
+/* Step 2: every pair of primitives sharing a grid cell. */
+static wm_status pairs(finder *cf)
+{
+    const wm_cells *pg = &cf->pg;
+    for (int32_t row = 0; row < pg->side; row++)
+        for (size_t cell = pg->row[row]; cell < pg->row[row + 1]; cell++)
         {
-            const size_t a = pg.start[cell], z = pg.start[cell + 1];
-            const int64_t cx = pg.col[cell] + cmin, cy = row + cmin;
+            const size_t a = pg->start[cell], z = pg->start[cell + 1];
+            const int64_t cx = pg->col[cell] + cf->cmin, cy = row + cf->cmin;
             for (size_t i = a; i < z; i++)
             {
-                if (wm_cancelled(ctx))
-                {
-                    st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
-                    goto cleanup;
-                }
+                if (wm_cancelled(cf->ctx))
+                    return wm_fail(cf->ctx, WM_ERR_CANCELLED, "cancelled");
                 for (size_t j = i + 1; j < z; j++)
-                {
-                    const prim *p = &pr[pg.item[i]], *q = &pr[pg.item[j]];
-                    if (p->item == q->item && p->item != NO_ITEM)
-                        continue;
-                    /* with a circle, boxes apart by more than any rounding
-                     * give no hit; two nearly parallel lines may (their
-                     * crossing is noise, far off), and are kept as they
-                     * were */
-                    const double *bp = pb + 4 * pg.item[i],
-                                 *bq = pb + 4 * pg.item[j];
-                    if ((p->circle || q->circle) &&
-                        (bp[0] > bq[2] + 4 || bq[0] > bp[2] + 4 ||
-                         bp[1] > bq[3] + 4 || bq[1] > bp[3] + 4))
-                        continue;
-                    dpt hit[2];
-                    const int nh = intersect(p, q, hit);
-                    for (int h = 0; h < nh; h++)
-                    {
-                        /* the crossing lies in both boxes; rounding may
-                         * put it a few ulps out, into a cell the pair
-                         * does not share, where it would never be seen */
-                        hit[h].x = fmin(fmax(hit[h].x, fmax(bp[0], bq[0])),
-                                        fmin(bp[2], bq[2]));
-                        hit[h].y = fmin(fmax(hit[h].y, fmax(bp[1], bq[1])),
-                                        fmin(bp[3], bq[3]));
-                        if (floor(hit[h].x / PC) != (double)cx ||
-                            floor(hit[h].y / PC) != (double)cy)
-                            continue;
-                        if (!(hit[h].x >= 1 && hit[h].x <= S - 1 &&
-                              hit[h].y >= 1 && hit[h].y <= S - 1))
-                            continue; /* strictly inside the block */
-                        const hit_pt c = {
-                            {round_pos(hit[h].x), round_pos(hit[h].y)},
-                            joint(in, p, q)};
-                        if (!wm_push((void **)&cand, &ncand, &candcap, &c,
-                                     sizeof c))
-                            goto nomem;
-                    }
-                }
+                    if (!pair_hits(cf, pg->item[i], pg->item[j], cx, cy))
+                        return WM_ERR_NOMEM;
             }
         }
-    /* the field is 1-Lipschitz: a point of the boundary is within 0.71 px
-     * of a sample valued within 0.71 px of 0; anything else is buried under
-     * another input. The samples are scattered over the block's field:
-     * fetched PREFETCH hits ahead. The kept ones are packed in place. */
-    for (size_t i = 0; i < ncand; i++)
+    return WM_OK;
+}
+
+/* Step 3: the candidates near the boundary, sorted and distinct, into
+ * in->corner (joint where every crossing found there is). The field is
+ * 1-Lipschitz: a point of the boundary is within 0.71 px of a sample
+ * valued within 0.71 px of 0; anything else is buried under another
+ * input. The samples are scattered over the block's field: fetched
+ * PREFETCH hits ahead. */
+static int keep_near(finder *cf, const wm_field *f)
+{
+    hit_pt *cand = cf->cand;
+    size_t kept = 0;
+    for (size_t i = 0; i < cf->ncand; i++)
     {
-        if (i + PREFETCH < ncand)
+        if (i + PREFETCH < cf->ncand)
             wm_field_prefetch(f, sample_of(cand[i + PREFETCH].p.x),
                               sample_of(cand[i + PREFETCH].p.y));
         const wm_pt c = cand[i].p;
         if (fabsf(wm_field_at(f, sample_of(c.x), sample_of(c.y))) <= 0.75f)
-            cand[nkept++] = cand[i];
+            cand[kept++] = cand[i];
     }
-    ncand = nkept;
-    if (ncand > 1)
-        qsort(cand, ncand, sizeof *cand, cmp_hit);
-    in->corner = malloc((ncand + 1) * sizeof *in->corner);
-    in->corner_joint = malloc(ncand + 1);
+    if (kept > 1)
+        qsort(cand, kept, sizeof *cand, cmp_hit);
+    wm_probe *in = cf->in;
+    in->corner = malloc((kept + 1) * sizeof *in->corner);
+    in->corner_joint = malloc(kept + 1);
     if (!in->corner || !in->corner_joint)
-        goto nomem;
+        return 0;
     size_t nu = 0;
-    for (size_t i = 0; i < ncand; i++)
+    for (size_t i = 0; i < kept; i++)
     {
         if (nu > 0 && wm_pt_eq(cand[i].p, in->corner[nu - 1]))
         {
@@ -406,13 +432,37 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
         in->corner_joint[nu++] = (uint8_t)cand[i].joint;
     }
     in->ncorner = nu;
-    goto cleanup;
-nomem:
-    st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory finding corners");
-cleanup:
-    free(pr);
-    wm_cells_free(&pg);
-    free(pb);
-    free(cand);
+    return 1;
+}
+
+wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
+{
+    if (probe->corners_found)
+        return WM_OK;
+    probe->corners_found = 1;
+    if (probe->nsegs + probe->npolys < 1)
+        return WM_OK;
+    finder cf;
+    memset(&cf, 0, sizeof cf);
+    cf.in = probe;
+    cf.ctx = ctx;
+    cf.S = probe->s->n * WM_Q;
+    cf.lo = -4.0 * WM_Q;
+    cf.hi = (double)cf.S + 4.0 * WM_Q;
+    wm_status st = WM_OK;
+    if (!river_prims(&cf) || !lake_prims(&cf))
+        st = WM_ERR_NOMEM;
+    else if (cf.npr >= NO_ITEM || probe->s->nsegs + probe->s->nedges >= NO_ITEM)
+        st = WM_OK; /* items and primitives need 32 bits: none found */
+    else if (!bucket(&cf))
+        st = WM_ERR_NOMEM;
+    else if ((st = pairs(&cf)) == WM_OK && !keep_near(&cf, f))
+        st = WM_ERR_NOMEM;
+    if (st == WM_ERR_NOMEM)
+        st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory finding corners");
+    free(cf.pr);
+    wm_cells_free(&cf.pg);
+    free(cf.pb);
+    free(cf.cand);
     return st;
 }

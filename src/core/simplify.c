@@ -108,6 +108,11 @@ typedef struct
     s_ent *ent;
     size_t nent, ent_cap;
     int64_t ox, oy, cs;
+    /* per ring: the input's area sign and nesting, the output's nesting */
+    signed char *sgn;
+    int32_t *enc_in, *enc_out;
+    s_query *qs; /* nesting queries of a repair round */
+    size_t nq, q_cap;
 } simp;
 
 /* ---- small helpers ------------------------------------------------------- */
@@ -851,312 +856,343 @@ static int s_sign(wm_i128 a)
     return (a > 0) - (a < 0);
 }
 
-wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
-                            wm_rings *out, const wm_ctx *ctx)
+/* Step 0: sp's arrays for input `in`, each vertex's ring and each ring's
+ * sign, and the input's nesting (sp->enc_in). */
+static wm_status s_setup(simp *sp, const wm_rings *in, double tol,
+                         const wm_ctx *ctx)
 {
-    wm_status st = WM_OK;
-    simp sp;
-    signed char *sgn = NULL;
-    int32_t *enc_in = NULL, *enc_out = NULL;
-    s_query *qs = NULL;
-    size_t nq = 0, q_cap = 0;
     const size_t n = in->npts, nr = in->nrings;
-
-    memset(&sp, 0, sizeof sp);
-    wm_rings_clear(out);
-    if (!(tol > 0.0) || nr == 0)
-        return s_copy(in, out, ctx);
-    if (n >= (size_t)UINT32_MAX - 1 || nr > (size_t)INT32_MAX)
-        return wm_fail(ctx, WM_ERR_NOMEM, "simplify: too many points");
-
-    sp.in = in;
-    sp.P = in->pts;
-    sp.n = n;
-    sp.nr = nr;
-    sp.ctx = ctx;
-    {
-        /* tol2 = floor(tol^2), capped far above any lattice distance^2
-         * (2^50) so that tol2 * len2 cannot overflow */
-        const double t2 = tol * tol;
-        sp.tol2 = t2 >= 0x1p60 ? (wm_i128)1 << 60 : (wm_i128)floor(t2);
-    }
-    sp.ring_of = malloc((n ? n : 1) * sizeof *sp.ring_of);
-    sp.kept = calloc(n ? n : 1, 1);
-    sp.nk = malloc((n ? n : 1) * sizeof *sp.nk);
-    sp.stack = malloc((n + 1) * sizeof *sp.stack);
-    sp.approx = malloc((n + 1) * sizeof *sp.approx);
-    sp.count = calloc(nr, sizeof *sp.count);
-    sp.rep = malloc(nr * sizeof *sp.rep);
-    sgn = malloc(nr);
-    enc_in = malloc(nr * sizeof *enc_in);
-    enc_out = malloc(nr * sizeof *enc_out);
-    if (!sp.ring_of || !sp.kept || !sp.nk || !sp.stack || !sp.approx ||
-        !sp.count || !sp.rep || !sgn || !enc_in || !enc_out)
-    {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "simplify: out of memory");
-        goto cleanup;
-    }
+    sp->in = in;
+    sp->P = in->pts;
+    sp->n = n;
+    sp->nr = nr;
+    sp->ctx = ctx;
+    /* tol2 = floor(tol^2), capped far above any lattice distance^2 (2^50)
+     * so that tol2 * len2 cannot overflow */
+    const double t2 = tol * tol;
+    sp->tol2 = t2 >= 0x1p60 ? (wm_i128)1 << 60 : (wm_i128)floor(t2);
+    sp->ring_of = malloc((n ? n : 1) * sizeof *sp->ring_of);
+    sp->kept = calloc(n ? n : 1, 1);
+    sp->nk = malloc((n ? n : 1) * sizeof *sp->nk);
+    sp->stack = malloc((n + 1) * sizeof *sp->stack);
+    sp->approx = malloc((n + 1) * sizeof *sp->approx);
+    sp->count = calloc(nr, sizeof *sp->count);
+    sp->rep = malloc(nr * sizeof *sp->rep);
+    sp->sgn = malloc(nr);
+    sp->enc_in = malloc(nr * sizeof *sp->enc_in);
+    sp->enc_out = malloc(nr * sizeof *sp->enc_out);
+    if (!sp->ring_of || !sp->kept || !sp->nk || !sp->stack || !sp->approx ||
+        !sp->count || !sp->rep || !sp->sgn || !sp->enc_in || !sp->enc_out)
+        return wm_fail(ctx, WM_ERR_NOMEM, "simplify: out of memory");
     for (size_t r = 0; r < nr; r++)
     {
         const size_t b = in->start[r], e = in->start[r + 1];
         for (size_t i = b; i < e; i++)
-            sp.ring_of[i] = (uint32_t)r;
-        sgn[r] = (signed char)s_sign(wm_ring_area2(in->pts + b, e - b));
+            sp->ring_of[i] = (uint32_t)r;
+        sp->sgn[r] = (signed char)s_sign(wm_ring_area2(in->pts + b, e - b));
     }
-    if ((st = wm_holes_nesting(in, enc_in, ctx)) != WM_OK)
-        goto cleanup;
+    return wm_holes_nesting(in, sp->enc_in, ctx);
+}
 
-    /* 1. Douglas-Peucker per chain between fixed vertices (or anchors) */
-    for (size_t r = 0; r < nr; r++)
+/* Step 1 for a ring with no vertex on the block's sides: Douglas-Peucker
+ * between its lowest vertex and the vertex farthest from it, both kept. */
+static void s_dp_free_ring(simp *sp, size_t b, size_t e, size_t r)
+{
+    const wm_pt *P = sp->P;
+    uint32_t a0 = (uint32_t)b, a1 = S_NONE;
+    int64_t best = -1;
+    for (size_t i = b + 1; i < e; i++)
+        if (P[i].y < P[a0].y || (P[i].y == P[a0].y && P[i].x < P[a0].x))
+            a0 = (uint32_t)i;
+    for (size_t i = b; i < e; i++)
     {
-        const size_t b = in->start[r], e = in->start[r + 1];
-        const wm_pt *P = in->pts;
-        size_t nfixed = 0;
-        uint32_t f0 = S_NONE;
-        if (e - b < 3)
+        const int64_t dx = (int64_t)P[i].x - P[a0].x;
+        const int64_t dy = (int64_t)P[i].y - P[a0].y;
+        if (dx * dx + dy * dy > best)
         {
-            /* not a valid ring: passed through unchanged */
-            for (size_t i = b; i < e; i++)
-                sp.kept[i] = 1;
-            sp.rep[r] = (uint32_t)b;
-            continue;
+            best = dx * dx + dy * dy;
+            a1 = (uint32_t)i;
         }
-        for (size_t i = b; i < e; i++)
-            if (s_border(P[i], size))
-            {
-                sp.kept[i] = 1;
-                if (nfixed++ == 0)
-                    f0 = (uint32_t)i;
-            }
-        if (nfixed == 0)
+    }
+    sp->kept[a0] = sp->kept[a1] = 1;
+    s_dp(sp, a0, a1);
+    s_dp(sp, a1, a0);
+    sp->rep[r] = a0;
+}
+
+/* Step 1 for a ring whose vertices on the block's sides (kept, f0 the
+ * first) cut it into chains: Douglas-Peucker per chain. */
+static void s_dp_fixed_ring(simp *sp, uint32_t f0, int32_t size, size_t r)
+{
+    const wm_pt *P = sp->P;
+    uint32_t cur = f0;
+    do
+    {
+        uint32_t j = s_nxt(sp, cur);
+        while (!s_border(P[j], size))
+            j = s_nxt(sp, j);
+        if (s_nxt(sp, cur) != j && s_same_side(P[cur], P[j], size))
         {
-            uint32_t a0 = (uint32_t)b, a1 = S_NONE;
-            int64_t best = -1;
-            for (size_t i = b + 1; i < e; i++)
-                if (P[i].y < P[a0].y || (P[i].y == P[a0].y && P[i].x < P[a0].x))
-                    a0 = (uint32_t)i;
-            for (size_t i = b; i < e; i++)
-            {
-                const int64_t dx = (int64_t)P[i].x - P[a0].x;
-                const int64_t dy = (int64_t)P[i].y - P[a0].y;
-                if (dx * dx + dy * dy > best)
-                {
-                    best = dx * dx + dy * dy;
-                    a1 = (uint32_t)i;
-                }
-            }
-            sp.kept[a0] = sp.kept[a1] = 1;
-            s_dp(&sp, a0, a1);
-            s_dp(&sp, a1, a0);
-            sp.rep[r] = a0;
+            /* the chain leaves the side between two of its vertices:
+             * straightening it would lay an edge along the side, covering
+             * in this block a piece of it that the neighbouring block does
+             * not; keep its farthest vertex whatever the tolerance */
+            const uint32_t m = s_far(sp, cur, j);
+            sp->kept[m] = 1;
+            s_dp(sp, cur, m);
+            s_dp(sp, m, j);
         }
         else
-        {
-            uint32_t cur = f0;
-            do
-            {
-                uint32_t j = s_nxt(&sp, cur);
-                while (!s_border(P[j], size))
-                    j = s_nxt(&sp, j);
-                if (s_nxt(&sp, cur) != j && s_same_side(P[cur], P[j], size))
-                {
-                    /* the chain leaves the side between two of its
-                     * vertices: straightening it would lay an edge along
-                     * the side, covering in this block a piece of it that
-                     * the neighbouring block does not; keep its farthest
-                     * vertex whatever the tolerance */
-                    const uint32_t m = s_far(&sp, cur, j);
-                    sp.kept[m] = 1;
-                    s_dp(&sp, cur, m);
-                    s_dp(&sp, m, j);
-                }
-                else
-                    s_dp(&sp, cur, j);
-                cur = j;
-            } while (cur != f0);
-            sp.rep[r] = f0;
-        }
-    }
+            s_dp(sp, cur, j);
+        cur = j;
+    } while (cur != f0);
+    sp->rep[r] = f0;
+}
 
-    /* 2. links and counts */
-    for (size_t r = 0; r < nr; r++)
+/* Step 1: Douglas-Peucker per chain between fixed vertices (the block's
+ * sides) or anchors; rings of fewer than 3 vertices pass unchanged. */
+static void s_dp_rings(simp *sp, int32_t size)
+{
+    const wm_rings *in = sp->in;
+    for (size_t r = 0; r < sp->nr; r++)
+    {
+        const size_t b = in->start[r], e = in->start[r + 1];
+        if (e - b < 3)
+        {
+            for (size_t i = b; i < e; i++)
+                sp->kept[i] = 1;
+            sp->rep[r] = (uint32_t)b;
+            continue;
+        }
+        uint32_t f0 = S_NONE;
+        for (size_t i = b; i < e; i++)
+            if (s_border(sp->P[i], size))
+            {
+                sp->kept[i] = 1;
+                if (f0 == S_NONE)
+                    f0 = (uint32_t)i;
+            }
+        if (f0 == S_NONE)
+            s_dp_free_ring(sp, b, e, r);
+        else
+            s_dp_fixed_ring(sp, f0, size, r);
+    }
+}
+
+/* Step 2: the kept vertices linked in ring order, counted per ring. */
+static void s_link(simp *sp)
+{
+    const wm_rings *in = sp->in;
+    for (size_t r = 0; r < sp->nr; r++)
     {
         const size_t b = in->start[r], e = in->start[r + 1];
         uint32_t first = S_NONE, prev = S_NONE;
         for (size_t i = b; i < e; i++)
-            if (sp.kept[i])
+            if (sp->kept[i])
             {
                 if (first == S_NONE)
                     first = (uint32_t)i;
                 else
-                    sp.nk[prev] = (uint32_t)i;
+                    sp->nk[prev] = (uint32_t)i;
                 prev = (uint32_t)i;
-                sp.count[r]++;
+                sp->count[r]++;
             }
         if (first != S_NONE)
-            sp.nk[prev] = first;
+            sp->nk[prev] = first;
     }
+}
 
-    /* 3. at least three vertices per ring */
-    for (size_t r = 0; r < nr; r++)
-        while (wm_rings_len(in, r) >= 3 && sp.count[r] < 3)
+/* Step 3: at least three vertices per ring that had them. */
+static wm_status s_three_each(simp *sp)
+{
+    for (size_t r = 0; r < sp->nr; r++)
+        while (wm_rings_len(sp->in, r) >= 3 && sp->count[r] < 3)
         {
             int did;
-            if ((st = s_refine_ring(&sp, r, &did)) != WM_OK)
-                goto cleanup;
+            const wm_status st = s_refine_ring(sp, r, &did);
+            if (st != WM_OK)
+                return st;
             if (!did)
-            {
-                st = wm_fail(ctx, WM_ERR_INTERNAL,
-                             "simplify: ring %zu cannot reach 3 vertices", r);
-                goto cleanup;
-            }
+                return wm_fail(sp->ctx, WM_ERR_INTERNAL,
+                               "simplify: ring %zu cannot reach 3 vertices", r);
         }
+    return WM_OK;
+}
 
-    /* 4. grid: cells twice the mean output segment length; all segments
-     *    queued for checking */
+/* Step 4: the grid (cells twice the mean output segment), every segment
+ * queued for checking. */
+static wm_status s_grid(simp *sp)
+{
+    const wm_pt *P = sp->P;
+    double sum = 0.0;
+    size_t nseg = 0;
+    int64_t xmin = INT64_MAX, ymin = INT64_MAX;
+    for (size_t i = 0; i < sp->n; i++)
     {
-        double sum = 0.0;
-        size_t nseg = 0;
-        int64_t xmin = INT64_MAX, ymin = INT64_MAX;
-        for (size_t i = 0; i < n; i++)
-        {
-            xmin = in->pts[i].x < xmin ? in->pts[i].x : xmin;
-            ymin = in->pts[i].y < ymin ? in->pts[i].y : ymin;
-        }
-        sp.nwork = sp.work_head = 0;
-        for (size_t i = 0; i < n; i++)
-            if (sp.kept[i])
-            {
-                const wm_pt a = in->pts[i], b2 = in->pts[sp.nk[i]];
-                sum += hypot((double)b2.x - a.x, (double)b2.y - a.y);
-                nseg++;
-                if ((st = s_push_work(&sp, (uint32_t)i, sp.nk[i])) != WM_OK)
-                    goto cleanup;
-            }
-        sp.ox = xmin;
-        sp.oy = ymin;
-        sp.cs = nseg ? (int64_t)ceil(2.0 * sum / (double)nseg) : 1;
-        if (sp.cs < 1)
-            sp.cs = 1;
-        unsigned bits = 10;
-        while (bits < 40 && ((size_t)1 << bits) < 4 * nseg)
-            bits++;
-        if ((st = s_table_alloc(&sp, bits)) != WM_OK)
-            goto cleanup;
+        xmin = P[i].x < xmin ? P[i].x : xmin;
+        ymin = P[i].y < ymin ? P[i].y : ymin;
     }
+    sp->nwork = sp->work_head = 0;
+    for (size_t i = 0; i < sp->n; i++)
+        if (sp->kept[i])
+        {
+            const wm_pt a = P[i], b = P[sp->nk[i]];
+            sum += hypot((double)b.x - a.x, (double)b.y - a.y);
+            nseg++;
+            const wm_status st = s_push_work(sp, (uint32_t)i, sp->nk[i]);
+            if (st != WM_OK)
+                return st;
+        }
+    sp->ox = xmin;
+    sp->oy = ymin;
+    sp->cs = nseg ? (int64_t)ceil(2.0 * sum / (double)nseg) : 1;
+    if (sp->cs < 1)
+        sp->cs = 1;
+    unsigned bits = 10;
+    while (bits < 40 && ((size_t)1 << bits) < 4 * nseg)
+        bits++;
+    return s_table_alloc(sp, bits);
+}
 
-    /* 5. repair rounds */
+/* Step 5a: every ring of 3 or more input vertices and nonzero area gets 3
+ * or more and its input's sign back; *changed when one needed it. */
+static wm_status s_fix_rings(simp *sp, int *changed)
+{
+    *changed = 0;
+    for (size_t r = 0; r < sp->nr; r++)
+    {
+        if (wm_rings_len(sp->in, r) < 3 || sp->sgn[r] == 0)
+            continue;
+        if (sp->count[r] >= 3 && s_sign(s_area2(sp, r)) == sp->sgn[r])
+            continue;
+        int did;
+        const wm_status st = s_refine_ring(sp, r, &did);
+        if (st != WM_OK)
+            return st;
+        *changed = 1;
+    }
+    return WM_OK;
+}
+
+/* Step 5b: the rings whose nesting changed (enc_in against enc_out), as
+ * containment queries in sp->qs (sp->nq of them). */
+static wm_status s_nesting_queries(simp *sp)
+{
+    sp->nq = 0;
+    for (size_t r = 0; r < sp->nr; r++)
+    {
+        const int32_t p = sp->enc_in[r], p2 = sp->enc_out[r];
+        s_query cand[4];
+        size_t nc = 0;
+        if (p == p2)
+            continue;
+        if (p >= 0)
+            cand[nc++] = (s_query){(uint32_t)p, (uint32_t)r};
+        if (p2 >= 0)
+            cand[nc++] = (s_query){(uint32_t)p2, (uint32_t)r};
+        if (p >= 0 && p2 >= 0)
+        {
+            cand[nc++] = (s_query){(uint32_t)p2, (uint32_t)p};
+            cand[nc++] = (s_query){(uint32_t)p, (uint32_t)p2};
+        }
+        if (!wm_grow((void **)&sp->qs, &sp->q_cap, sp->nq + nc, sizeof *sp->qs))
+            return wm_fail(sp->ctx, WM_ERR_NOMEM, "simplify: out of memory");
+        memcpy(sp->qs + sp->nq, cand, nc * sizeof *cand);
+        sp->nq += nc;
+    }
+    return WM_OK;
+}
+
+/* Step 5c: the queries answered by restoring vertices, or else every ring
+ * involved restored whole. */
+static wm_status s_fix_nesting(simp *sp)
+{
+    int did;
+    wm_status st = s_fix_queries(sp, sp->qs, sp->nq, &did);
+    for (size_t k = 0; st == WM_OK && !did && k < sp->nq; k++)
+        if ((st = s_restore_ring(sp, sp->qs[k].S)) == WM_OK)
+            st = s_restore_ring(sp, sp->qs[k].t);
+    return st;
+}
+
+/* Step 5: repair rounds until the output is valid and nested as the input
+ * (written to out), each restoring vertices. */
+static wm_status s_repair(simp *sp, wm_rings *out)
+{
     for (int round = 0;; round++)
     {
-        const size_t added0 = sp.added;
-        int changed = 0;
+        const size_t added0 = sp->added;
+        int changed;
+        wm_status st;
         if (round >= S_MAX_ROUNDS)
-        {
-            st = wm_fail(ctx, WM_ERR_INTERNAL,
-                         "simplify: repair did not converge");
-            goto cleanup;
-        }
-        if ((st = s_resolve(&sp)) != WM_OK)
-            goto cleanup;
-        /* >= 3 vertices, nonzero area of the input's sign */
-        for (size_t r = 0; r < nr; r++)
-        {
-            if (wm_rings_len(in, r) < 3 || sgn[r] == 0)
-                continue;
-            if (sp.count[r] >= 3 && s_sign(s_area2(&sp, r)) == sgn[r])
-                continue;
-            int did;
-            if ((st = s_refine_ring(&sp, r, &did)) != WM_OK)
-                goto cleanup;
-            changed = 1;
-        }
+            return wm_fail(sp->ctx, WM_ERR_INTERNAL,
+                           "simplify: repair did not converge");
+        if ((st = s_resolve(sp)) != WM_OK ||
+            (st = s_fix_rings(sp, &changed)) != WM_OK)
+            return st;
         if (changed)
         {
-            if (sp.added == added0)
-            {
-                st = wm_fail(ctx, WM_ERR_INTERNAL,
-                             "simplify: a ring cannot be repaired");
-                goto cleanup;
-            }
+            if (sp->added == added0)
+                return wm_fail(sp->ctx, WM_ERR_INTERNAL,
+                               "simplify: a ring cannot be repaired");
             continue;
         }
-        /* nesting */
-        if ((st = s_emit(&sp, out)) != WM_OK ||
-            (st = wm_holes_nesting(out, enc_out, ctx)) != WM_OK)
-            goto cleanup;
-        nq = 0;
-        for (size_t r = 0; r < nr; r++)
-        {
-            const int32_t p = enc_in[r], p2 = enc_out[r];
-            s_query cand[4];
-            size_t nc = 0;
-            if (p == p2)
-                continue;
-            if (p >= 0)
-            {
-                cand[nc].S = (uint32_t)p;
-                cand[nc++].t = (uint32_t)r;
-            }
-            if (p2 >= 0)
-            {
-                cand[nc].S = (uint32_t)p2;
-                cand[nc++].t = (uint32_t)r;
-            }
-            if (p >= 0 && p2 >= 0)
-            {
-                cand[nc].S = (uint32_t)p2;
-                cand[nc++].t = (uint32_t)p;
-                cand[nc].S = (uint32_t)p;
-                cand[nc++].t = (uint32_t)p2;
-            }
-            if (!wm_grow((void **)&qs, &q_cap, nq + nc, sizeof *qs))
-            {
-                st = wm_fail(ctx, WM_ERR_NOMEM, "simplify: out of memory");
-                goto cleanup;
-            }
-            memcpy(qs + nq, cand, nc * sizeof *cand);
-            nq += nc;
-        }
-        if (nq == 0)
-            break; /* clean */
-        {
-            int did;
-            if ((st = s_fix_queries(&sp, qs, nq, &did)) != WM_OK)
-                goto cleanup;
-            if (!did)
-            {
-                /* fall back: restore every ring involved */
-                for (size_t k = 0; k < nq; k++)
-                    if ((st = s_restore_ring(&sp, qs[k].S)) != WM_OK ||
-                        (st = s_restore_ring(&sp, qs[k].t)) != WM_OK)
-                        goto cleanup;
-            }
-        }
-        if (sp.added == added0)
-        {
-            st = wm_fail(ctx, WM_ERR_INTERNAL,
-                         "simplify: nesting cannot be repaired");
-            goto cleanup;
-        }
+        if ((st = s_emit(sp, out)) != WM_OK ||
+            (st = wm_holes_nesting(out, sp->enc_out, sp->ctx)) != WM_OK ||
+            (st = s_nesting_queries(sp)) != WM_OK)
+            return st;
+        if (sp->nq == 0)
+            return WM_OK; /* clean */
+        if ((st = s_fix_nesting(sp)) != WM_OK)
+            return st;
+        if (sp->added == added0)
+            return wm_fail(sp->ctx, WM_ERR_INTERNAL,
+                           "simplify: nesting cannot be repaired");
     }
+}
 
-cleanup:
+static void s_free(simp *sp)
+{
+    free(sp->ring_of);
+    free(sp->kept);
+    free(sp->nk);
+    free(sp->stack);
+    free(sp->approx);
+    free(sp->count);
+    free(sp->rep);
+    free(sp->work);
+    free(sp->keys);
+    free(sp->heads);
+    free(sp->ent);
+    free(sp->sgn);
+    free(sp->enc_in);
+    free(sp->enc_out);
+    free(sp->qs);
+}
+
+wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
+                            wm_rings *out, const wm_ctx *ctx)
+{
+    wm_rings_clear(out);
+    if (!(tol > 0.0) || in->nrings == 0)
+        return s_copy(in, out, ctx);
+    if (in->npts >= (size_t)UINT32_MAX - 1 || in->nrings > (size_t)INT32_MAX)
+        return wm_fail(ctx, WM_ERR_NOMEM, "simplify: too many points");
+    simp sp;
+    memset(&sp, 0, sizeof sp);
+    wm_status st = s_setup(&sp, in, tol, ctx);
+    if (st == WM_OK)
+    {
+        s_dp_rings(&sp, size);
+        s_link(&sp);
+        st = s_three_each(&sp);
+    }
+    if (st == WM_OK)
+        st = s_grid(&sp);
+    if (st == WM_OK)
+        st = s_repair(&sp, out);
     if (st != WM_OK)
         wm_rings_clear(out);
-    free(sp.ring_of);
-    free(sp.kept);
-    free(sp.nk);
-    free(sp.stack);
-    free(sp.approx);
-    free(sp.count);
-    free(sp.rep);
-    free(sp.work);
-    free(sp.keys);
-    free(sp.heads);
-    free(sp.ent);
-    free(sgn);
-    free(enc_in);
-    free(enc_out);
-    free(qs);
+    s_free(&sp);
     return st;
 }
