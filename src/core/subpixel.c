@@ -329,6 +329,8 @@ static int loose(const edge_view *e)
  * are taken 1/1000 pixel smaller, the margin undecided() allows. */
 static int capsule_may_cross(float va, float vb, double r)
 {
+    if (isinf(r))
+        return 0; /* no river in reach */
     const double a = (va > 0.001f ? va - 0.001 : 0) + r;
     const double b = (vb > 0.001f ? vb - 0.001 : 0) + r;
     const double A = a * a, B = b * b;
