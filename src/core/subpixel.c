@@ -228,9 +228,8 @@ typedef struct
  * at s and those k = 1, 2 rows beside it, each valued v clearing
  * sqrt(v^2 - k^2) of the line on both sides of its foot (the field is
  * 1-Lipschitz and |v| never exceeds the distance to the boundary, in land
- * and in water). clear_edge() takes the rows the tile holds; clear_of()
- * goes straight to all four where it holds them (most edges). */
-static float clear_edge(const float *s, const edge_view *e)
+ * and in water). */
+static float clear_of(const float *s, const edge_view *e)
 {
     float h2 = s[0] * s[0];
     for (int k = 1; k <= 2; k++)
@@ -242,20 +241,6 @@ static float clear_edge(const float *s, const edge_view *e)
                 h2 = e2 > h2 ? e2 : h2;
             }
     return sqrtf(h2);
-}
-
-static inline float clear_of(const float *s, const edge_view *e)
-{
-    if (e->lo < 2 || e->hi < 2)
-        return clear_edge(s, e);
-    const ptrdiff_t d = e->across;
-    const float a = s[0] * s[0];
-    const float b = s[-d] * s[-d] - 1.0f, c = s[d] * s[d] - 1.0f;
-    const float g = s[-2 * d] * s[-2 * d] - 4.0f,
-                h = s[2 * d] * s[2 * d] - 4.0f;
-    const float m1 = a > b ? a : b, m2 = c > g ? c : g;
-    const float m3 = m1 > m2 ? m1 : m2;
-    return sqrtf(m3 > h ? m3 : h);
 }
 
 /* [*L, *U]: the part of the edge (pixels from a) that the balls of the
