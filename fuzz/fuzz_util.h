@@ -15,9 +15,10 @@
  * a few more so that seams and the walk are exercised. */
 #define FUZZ_BLOCKS 4
 
-static int fuzz_free_block(void *user, wm_block_result *res)
+static int fuzz_free_block(void *user, wm_block_result *res, void *prep)
 {
     (void)user;
+    (void)prep;
     wm_block_result_free(res);
     return TRUE;
 }
@@ -32,7 +33,8 @@ static void fuzz_run_scene(WMScene *s)
     if (WMBlockWalkNext(&w, blocks, FUZZ_BLOCKS, &n) && n > 0)
     {
         WMRunStats st;
-        WMRunBlocks(s, blocks, n, fuzz_free_block, NULL, NULL, NULL, &st);
+        const WMBlockSink sink = {fuzz_free_block, NULL, NULL, NULL};
+        WMRunBlocks(s, blocks, n, &sink, NULL, NULL, &st);
     }
     WMBlockWalkEnd(&w);
 }

@@ -20,6 +20,7 @@
 #include <climits>
 #include <cctype>
 #include <cstring>
+#include <new>
 #include <cmath>
 #include <map>
 #include <memory>
@@ -273,7 +274,7 @@ struct FetchSink
     std::map<std::pair<int64_t, int64_t>, ResultPtr> *computed;
 };
 
-static int fetch_sink(void *user, wm_block_result *res)
+static int fetch_sink(void *user, wm_block_result *res, void *)
 {
     auto *s = static_cast<FetchSink *>(user);
     wm_block_result *copy = nullptr;
@@ -319,10 +320,11 @@ bool WaterMeshDataset::Fetch(const int64_t *blocks, size_t n,
     if (!todo.empty())
     {
         std::map<BlockKey, ResultPtr> computed;
-        FetchSink sink{&computed};
+        FetchSink fetched{&computed};
+        const WMBlockSink sink = {fetch_sink, nullptr, nullptr, &fetched};
         WMRunStats st;
-        if (WMRunBlocks(m_poScene, todo.data(), todo.size() / 2, fetch_sink,
-                        &sink, nullptr, nullptr, &st) != CE_None)
+        if (WMRunBlocks(m_poScene, todo.data(), todo.size() / 2, &sink, nullptr,
+                        nullptr, &st) != CE_None)
             return false;
         for (auto &kv : computed)
         {
@@ -429,6 +431,8 @@ OGRFeature *WaterMeshLayer::GetNextRawFeature()
         auto poFeature = OGRFeature::FromHandle(
             WMNewFeature(s, OGRFeatureDefn::ToHandle(m_poDefn), m_bMesh, r,
                          m_iPoly, m_bPerTriangle ? item : SIZE_MAX));
+        if (!poFeature)
+            throw std::bad_alloc();
         poFeature->SetFID(m_bPerTriangle
                               ? (blk << 32) + static_cast<GIntBig>(item)
                               : (blk << 24) + static_cast<GIntBig>(item));

@@ -240,8 +240,9 @@ static int write_glb(const glb_sink *g, const wm_block_result *r,
     return ok;
 }
 
-static int glb_block(void *user, wm_block_result *r)
+static int glb_block(void *user, wm_block_result *r, void *prep)
 {
+    (void)prep;
     glb_sink *g = user;
     int ok = TRUE;
     if (r->npolys > 0 && r->poly_tri[r->npolys] > 0)
@@ -308,7 +309,8 @@ CPLErr WMSceneWriteGLB(const WMScene *s, const char *folder,
                        GDALProgressFunc pfn, void *pArg)
 {
     glb_sink g = {s, folder, crs_json(s->hSRS), NULL, 0, 0};
-    CPLErr err = WMSceneRun(s, glb_block, &g, pfn, pArg);
+    const WMBlockSink sink = {glb_block, NULL, NULL, &g};
+    CPLErr err = WMSceneRun(s, &sink, pfn, pArg);
     if (err == CE_None && !write_index(&g))
         err = CE_Failure;
     for (size_t i = 0; i < g.nentries; i++)

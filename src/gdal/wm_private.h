@@ -222,9 +222,21 @@ void WMBlockWalkEnd(WMBlockWalk *w);
 /** How many blocks a walk with this filter visits (row runs only). */
 int WMBlockCount(const WMScene *s, const double *spat, uint64_t *count);
 
-/** Called from the calling thread, in block order; takes ownership of res.
- *  Returns FALSE to stop the run (after a CPLError). */
-typedef int (*WMBlockSink)(void *user, wm_block_result *res);
+/** Where a run's block results go.
+ *  put: called from the calling thread, in block order; takes ownership of
+ *  res and prep; returns FALSE to stop the run (after a CPLError).
+ *  prepare (optional): called from the worker thread that computed res,
+ *  before put, to do put's work that needs no shared state (building
+ *  features); what it returns is put's prep (NULL: nothing prepared, put
+ *  does it all). drop: frees a prep that never reached put (a run that
+ *  stopped early). */
+typedef struct
+{
+    int (*put)(void *user, wm_block_result *res, void *prep);
+    void *(*prepare)(void *user, const wm_block_result *res);
+    void (*drop)(void *user, void *prep);
+    void *user;
+} WMBlockSink;
 
 /** Run statistics of WMRunBlocks. */
 typedef struct
@@ -243,18 +255,9 @@ void WMKeepFirstError(void *user, wm_status status, const char *msg);
 /** Runs blocks on num_threads threads, at most a few per thread in flight,
  *  handing results to sink in order. CE_Failure after a CPLError. */
 CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
-                   WMBlockSink sink, void *user, GDALProgressFunc pfn,
-                   void *pArg, WMRunStats *stats);
+                   const WMBlockSink *sink, GDALProgressFunc pfn, void *pArg,
+                   WMRunStats *stats);
 
-/** Features of one polygon of a block result (world coordinates). Caller
- *  destroys with OGR_G_DestroyGeometry. */
-OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
-                               size_t p);
-OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
-                            size_t p);
-/** Triangle t of a block result as a Polygon (MESH_GEOMETRY=TRIANGLES). */
-OGRGeometryH WMTriangleGeometry(const WMScene *s, const wm_block_result *r,
-                                size_t t);
 /** The mesh layer's geometry type: wkbMultiPolygon, wkbTIN, or wkbPolygon
  *  under MESH_GEOMETRY=TRIANGLES. */
 OGRwkbGeometryType WMMeshType(const WMScene *s);
@@ -278,7 +281,10 @@ const WMField *WMLayerFields(const WMScene *s, int mesh);
 /** A feature of layer definition defn with polygon p of block result r
  *  (mesh FALSE: water) or its mesh, or with triangle t (t != SIZE_MAX,
  *  MESH_GEOMETRY=TRIANGLES); the fields of WMLayerFields that defn has are
- *  set. Caller destroys it. */
+ *  set. Caller destroys it. NULL when out of memory. Geometries are in
+ *  world coordinates: the water polygon; the polygon's triangles as a
+ *  MultiPolygon (a set of triangles sharing edges, not OGC-valid) or a
+ *  TIN; a triangle as a Polygon. */
 OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
                          const wm_block_result *r, size_t p, size_t t);
 /** Polygon area in m^2 (exact lattice area, then scaled). */
@@ -288,7 +294,7 @@ double WMPolygonArea(const WMScene *s, const wm_block_result *r, size_t p);
  *  SHARD's range),
  *  handing each result to sink in block order; prints the stage table
  *  when STATS was set. */
-CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
+CPLErr WMSceneRun(const WMScene *s, const WMBlockSink *sink,
                   GDALProgressFunc pfn, void *pArg);
 
 /** WMSceneRun writing the features to hWater / hMesh (either may be

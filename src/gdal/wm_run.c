@@ -20,6 +20,7 @@
 #include <cpl_conv.h>
 #include <cpl_string.h>
 
+#include <limits.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,6 +32,7 @@ typedef struct
     const WMScene *s;
     const int64_t *blocks;
     size_t nblocks, window;
+    const WMBlockSink *sink;
     wm_block_opts opts;
     pthread_mutex_t mu;
     pthread_cond_t cv;
@@ -38,6 +40,7 @@ typedef struct
     size_t consumed; /* blocks handed to the sink */
     int stop;
     wm_block_result *slot; /* window slots */
+    void **prep;           /* per slot: what sink->prepare made */
     int *ready;            /* per slot: 0 empty, 1 ok, -1 failed */
     char **msg;            /* per slot: error text */
     /* pipelined runs only (a feeder computes the fields) */
@@ -140,8 +143,12 @@ static void *worker(void *arg)
             }
             res.seconds[WM_STAGE_TRIANGULATE] += wm_now() - t0;
         }
+        void *prep = st == WM_OK && r->sink->prepare
+                         ? r->sink->prepare(r->sink->user, &res)
+                         : NULL;
         pthread_mutex_lock(&r->mu);
         r->slot[k] = res;
+        r->prep[k] = prep;
         r->msg[k] = msg;
         r->ready[k] = st == WM_OK ? 1 : -1;
         pthread_cond_broadcast(&r->cv);
@@ -188,8 +195,8 @@ static int wait_ready(runner *r, size_t k, GDALProgressFunc pfn, void *pArg,
 }
 
 CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
-                   WMBlockSink sink, void *user, GDALProgressFunc pfn,
-                   void *pArg, WMRunStats *stats)
+                   const WMBlockSink *sink, GDALProgressFunc pfn, void *pArg,
+                   WMRunStats *stats)
 {
     CPLErr err = CE_None;
     runner r;
@@ -202,6 +209,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     r.s = s;
     r.blocks = blocks;
     r.nblocks = nblocks;
+    r.sink = sink;
     r.window = 4 * (size_t)nthreads + 1; /* slack behind a slow block */
     r.opts.simplify = s->params.simplify / s->unit;
     r.opts.triangulate = 1;
@@ -214,6 +222,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     r.opts.dev = WMDeviceField(s->device);
     r.pipelined = r.opts.dev != NULL;
     r.slot = CPLCalloc(r.window, sizeof *r.slot);
+    r.prep = CPLCalloc(r.window, sizeof *r.prep);
     r.field = CPLCalloc(r.window, sizeof *r.field);
     r.fready = CPLCalloc(r.window, sizeof *r.fready);
     r.fmsg = CPLCalloc(r.window, sizeof *r.fmsg);
@@ -254,6 +263,8 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
             break;
         }
         wm_block_result res = r.slot[k];
+        void *prep = r.prep[k];
+        r.prep[k] = NULL;
         const int ok = r.ready[k] > 0;
         char *msg = r.msg[k];
         r.ready[k] = 0;
@@ -286,7 +297,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
         stats->steiner += res.steiner;
         stats->small_input += res.small_input;
         stats->left += res.left;
-        if (!sink(user, &res))
+        if (!sink->put(sink->user, &res, prep))
         {
             err = CE_Failure;
             break;
@@ -307,6 +318,8 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     {
         if (r.ready[k] > 0)
             wm_block_result_free(&r.slot[k]);
+        if (r.prep[k])
+            sink->drop(sink->user, r.prep[k]);
         if (r.fready[k] > 0)
             wm_field_free(&r.field[k]);
         CPLFree(r.msg[k]);
@@ -318,6 +331,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     CPLFree(r.fsec);
     CPLFree(th);
     CPLFree(r.slot);
+    CPLFree(r.prep);
     CPLFree(r.ready);
     CPLFree(r.msg);
     pthread_mutex_destroy(&r.mu);
@@ -337,34 +351,127 @@ static void world(const WMScene *s, const wm_block_result *r, wm_pt p,
 
 /* Point k of the block's rings into point i of g, with its height when
  * the result has heights. */
-static void set_point(OGRGeometryH g, int i, const WMScene *s,
-                      const wm_block_result *r, size_t k)
+/* ---- geometries: written as WKB, then imported by OGR in one call ----- */
+
+/* A WKB writer into a buffer sized beforehand; native byte order. */
+typedef struct
 {
-    double x, y;
-    world(s, r, wm_block_point(r, k), &x, &y);
-    if (r->z)
-        OGR_G_SetPoint(g, i, x, y, r->z[k]);
-    else
-        OGR_G_SetPoint_2D(g, i, x, y);
+    unsigned char *p;
+    const WMScene *s;
+    const wm_block_result *r;
+} wkb_out;
+
+#define WKB_HEAD 9 /* byte order, type, count */
+
+/* Bytes of a ring of n points (with its count). */
+static size_t ring_bytes(const wm_block_result *r, size_t n)
+{
+    return 4 + n * (r->z ? 24 : 16);
 }
 
-static OGRGeometryH ring_geom(const WMScene *s, const wm_block_result *r,
-                              size_t ri)
+static void put_u32(wkb_out *o, size_t v)
 {
-    OGRGeometryH g = OGR_G_CreateGeometry(wkbLinearRing);
-    const size_t a = r->rings.start[ri], b = r->rings.start[ri + 1];
-    OGR_G_SetPointCount(g, (int)(b - a + 1));
-    for (size_t k = a; k <= b; k++)
-        set_point(g, (int)(k - a), s, r, k == b ? a : k);
-    return g;
+    const uint32_t u = (uint32_t)v;
+    memcpy(o->p, &u, 4);
+    o->p += 4;
 }
 
-OGRGeometryH WMPolygonGeometry(const WMScene *s, const wm_block_result *r,
-                               size_t p)
+/* A geometry's header: ISO type (2D code; Z adds 1000), then count. */
+static void put_head(wkb_out *o, uint32_t iso_type, size_t count)
 {
-    OGRGeometryH g = OGR_G_CreateGeometry(r->z ? wkbPolygon25D : wkbPolygon);
+    *o->p++ = CPL_IS_LSB;
+    put_u32(o, iso_type + (o->r->z ? 1000 : 0));
+    put_u32(o, count);
+}
+
+static void put_point(wkb_out *o, size_t k)
+{
+    double c[3];
+    world(o->s, o->r, wm_block_point(o->r, k), &c[0], &c[1]);
+    size_t dim = 2;
+    if (o->r->z)
+        c[dim++] = o->r->z[k];
+    memcpy(o->p, c, dim * sizeof(double));
+    o->p += dim * sizeof(double);
+}
+
+enum
+{
+    ISO_POLYGON = 3,
+    ISO_MULTIPOLYGON = 6,
+    ISO_TIN = 16,
+    ISO_TRIANGLE = 17
+};
+
+static size_t polygon_bytes(const wm_block_result *r, size_t p)
+{
+    size_t b = WKB_HEAD;
     for (size_t ri = r->poly_ring[p]; ri < r->poly_ring[p + 1]; ri++)
-        OGR_G_AddGeometryDirectly(g, ring_geom(s, r, ri));
+        b += ring_bytes(r, wm_rings_len(&r->rings, ri) + 1);
+    return b;
+}
+
+/* Polygon p: its rings, each closed. */
+static void put_polygon(wkb_out *o, size_t p)
+{
+    const wm_block_result *r = o->r;
+    put_head(o, ISO_POLYGON, r->poly_ring[p + 1] - r->poly_ring[p]);
+    for (size_t ri = r->poly_ring[p]; ri < r->poly_ring[p + 1]; ri++)
+    {
+        const size_t a = r->rings.start[ri], b = r->rings.start[ri + 1];
+        put_u32(o, b - a + 1);
+        for (size_t k = a; k <= b; k++)
+            put_point(o, k == b ? a : k);
+    }
+}
+
+static size_t triangle_bytes(const wm_block_result *r)
+{
+    return WKB_HEAD + ring_bytes(r, 4);
+}
+
+/* Triangle t as a Polygon or a Triangle: one closed counter-clockwise
+ * ring. */
+static void put_triangle(wkb_out *o, size_t t, uint32_t iso_type)
+{
+    put_head(o, iso_type, 1);
+    put_u32(o, 4);
+    for (int k = 0; k <= 3; k++)
+        put_point(o, o->r->tris[3 * t + (size_t)(k % 3)]);
+}
+
+/* The geometry of polygon p (mesh FALSE: the water polygon; TRUE: its
+ * triangles, a MultiPolygon of triangles sharing edges (not an OGC-valid
+ * MultiPolygon: a set of triangles) or a TIN), or of triangle t as a
+ * Polygon (t != SIZE_MAX); NULL when out of memory. */
+static OGRGeometryH geometry(const WMScene *s, const wm_block_result *r,
+                             int mesh, size_t p, size_t t)
+{
+    const int tin = s->params.mesh_form == WM_MESH_TIN;
+    const size_t t0 = r->poly_tri ? r->poly_tri[p] : 0;
+    const size_t nt = r->poly_tri ? r->poly_tri[p + 1] - t0 : 0;
+    const size_t bytes = !mesh           ? polygon_bytes(r, p)
+                         : t != SIZE_MAX ? triangle_bytes(r)
+                                         : WKB_HEAD + nt * triangle_bytes(r);
+    unsigned char *buf = VSIMalloc(bytes);
+    if (!buf)
+        return NULL;
+    wkb_out o = {buf, s, r};
+    if (!mesh)
+        put_polygon(&o, p);
+    else if (t != SIZE_MAX)
+        put_triangle(&o, t, ISO_POLYGON);
+    else
+    {
+        put_head(&o, tin ? ISO_TIN : ISO_MULTIPOLYGON, nt);
+        for (size_t k = t0; k < t0 + nt; k++)
+            put_triangle(&o, k, tin ? ISO_TRIANGLE : ISO_POLYGON);
+    }
+    OGRGeometryH g = NULL;
+    if (OGR_G_CreateFromWkb(buf, NULL, &g,
+                            bytes <= INT_MAX ? (int)bytes : -1) != OGRERR_NONE)
+        g = NULL;
+    VSIFree(buf);
     return g;
 }
 
@@ -379,40 +486,6 @@ OGRwkbGeometryType WMMeshType(const WMScene *s)
 OGRwkbGeometryType WMWaterType(const WMScene *s)
 {
     return s->params.elevation ? wkbPolygon25D : wkbPolygon;
-}
-
-/* Triangle t as a geometry of type `type` (wkbPolygon or wkbTriangle):
- * one closed counter-clockwise ring. */
-static OGRGeometryH triangle(const WMScene *s, const wm_block_result *r,
-                             size_t t, OGRwkbGeometryType type)
-{
-    OGRGeometryH tri = OGR_G_CreateGeometry(r->z ? OGR_GT_SetZ(type) : type);
-    OGRGeometryH ring = OGR_G_CreateGeometry(wkbLinearRing);
-    OGR_G_SetPointCount(ring, 4); /* one allocation */
-    for (int k = 0; k <= 3; k++)
-        set_point(ring, k, s, r, r->tris[3 * t + (size_t)(k % 3)]);
-    OGR_G_AddGeometryDirectly(tri, ring);
-    return tri;
-}
-
-/* Polygon p's triangles: a MultiPolygon of triangles sharing edges (not an
- * OGC-valid MultiPolygon: a set of triangles), or a TIN of Triangles. */
-OGRGeometryH WMMeshGeometry(const WMScene *s, const wm_block_result *r,
-                            size_t p)
-{
-    const int tin = s->params.mesh_form == WM_MESH_TIN;
-    const OGRwkbGeometryType type = tin ? wkbTIN : wkbMultiPolygon;
-    OGRGeometryH g = OGR_G_CreateGeometry(r->z ? OGR_GT_SetZ(type) : type);
-    for (size_t t = r->poly_tri[p]; t < r->poly_tri[p + 1]; t++)
-        OGR_G_AddGeometryDirectly(
-            g, triangle(s, r, t, tin ? wkbTriangle : wkbPolygon));
-    return g;
-}
-
-OGRGeometryH WMTriangleGeometry(const WMScene *s, const wm_block_result *r,
-                                size_t t)
-{
-    return triangle(s, r, t, wkbPolygon);
 }
 
 const WMField *WMLayerFields(const WMScene *s, int mesh)
@@ -455,7 +528,6 @@ OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
     set_int(f, "block_x", r->bx);
     set_int(f, "block_y", r->by);
     set_int(f, "polygon", (GIntBig)p);
-    OGRGeometryH g;
     if (!mesh)
     {
         const int ia = OGR_F_GetFieldIndex(f, "area");
@@ -468,14 +540,14 @@ OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
             OGR_F_SetFieldDouble(f, il, s->drape->body_level[r->poly_body[p]]);
             OGR_F_SetFieldDouble(f, is, s->drape->body_spread[r->poly_body[p]]);
         }
-        g = WMPolygonGeometry(s, r, p);
     }
-    else if (t != SIZE_MAX)
-        g = WMTriangleGeometry(s, r, t);
-    else
-    {
+    else if (t == SIZE_MAX)
         set_int(f, "triangles", (GIntBig)(r->poly_tri[p + 1] - r->poly_tri[p]));
-        g = WMMeshGeometry(s, r, p);
+    OGRGeometryH g = geometry(s, r, mesh, p, t);
+    if (!g)
+    {
+        OGR_F_Destroy(f);
+        return NULL;
     }
     OGR_F_SetGeometryDirectly(f, g);
     return f;
@@ -545,38 +617,95 @@ void WMPrintStats(const WMScene *s, const WMRunStats *st)
 typedef struct
 {
     const WMScene *s;
-    OGRLayerH water, mesh;
+    OGRLayerH layer[2];      /* water, mesh (either may be NULL) */
+    OGRFeatureDefnH defn[2]; /* theirs, read once */
 } gen_sink;
 
-/* Writes the feature of polygon p (or triangle t) to layer l. */
-static int put(const gen_sink *g, OGRLayerH l, int mesh,
-               const wm_block_result *res, size_t p, size_t t)
+/* A block's features in writing order (each polygon's water feature, then
+ * its mesh, or its triangles), each with its layer. */
+typedef struct
 {
-    OGRFeatureH f = WMNewFeature(g->s, OGR_L_GetLayerDefn(l), mesh, res, p, t);
-    const int ok = OGR_L_CreateFeature(l, f) == OGRERR_NONE;
-    OGR_F_Destroy(f);
-    return ok;
+    size_t n;
+    OGRFeatureH *f;
+    unsigned char *mesh; /* per feature: layer index */
+} gen_features;
+
+static void drop_features(void *user, void *prep)
+{
+    (void)user;
+    gen_features *gf = prep;
+    for (size_t i = 0; i < gf->n; i++)
+        OGR_F_Destroy(gf->f[i]);
+    VSIFree(gf->f);
+    VSIFree(gf->mesh);
+    VSIFree(gf);
 }
 
-static int write_block(void *user, wm_block_result *res)
+static int add_feature(gen_features *gf, const gen_sink *g, int mesh,
+                       const wm_block_result *res, size_t p, size_t t)
 {
-    gen_sink *g = user;
+    OGRFeatureH f = WMNewFeature(g->s, g->defn[mesh], mesh, res, p, t);
+    if (!f)
+        return FALSE;
+    gf->f[gf->n] = f;
+    gf->mesh[gf->n++] = (unsigned char)mesh;
+    return TRUE;
+}
+
+/* Builds block res's features (in a worker: OGR features and geometries
+ * are the thread's own; the layer definitions are only read); NULL when
+ * out of memory. */
+static void *make_features(void *user, const wm_block_result *res)
+{
+    const gen_sink *g = user;
     const int per_triangle = g->s->params.mesh_form == WM_MESH_TRIANGLES;
-    int ok = TRUE;
+    const size_t per_poly =
+        (g->layer[0] != NULL) + (g->layer[1] != NULL && !per_triangle);
+    const size_t cap =
+        res->npolys * per_poly + (g->layer[1] && per_triangle && res->poly_tri
+                                      ? res->poly_tri[res->npolys]
+                                      : 0);
+    gen_features *gf = VSICalloc(1, sizeof *gf);
+    if (gf)
+    {
+        gf->f = VSIMalloc2(cap ? cap : 1, sizeof *gf->f);
+        gf->mesh = VSIMalloc(cap ? cap : 1);
+    }
+    int ok = gf && gf->f && gf->mesh;
     for (size_t p = 0; ok && p < res->npolys; p++)
     {
-        if (g->water)
-            ok = put(g, g->water, FALSE, res, p, SIZE_MAX);
-        if (ok && g->mesh && !per_triangle)
-            ok = put(g, g->mesh, TRUE, res, p, SIZE_MAX);
+        if (g->layer[0])
+            ok = add_feature(gf, g, FALSE, res, p, SIZE_MAX);
+        if (ok && g->layer[1] && !per_triangle)
+            ok = add_feature(gf, g, TRUE, res, p, SIZE_MAX);
         for (size_t t = res->poly_tri[p];
-             ok && g->mesh && per_triangle && t < res->poly_tri[p + 1]; t++)
-            ok = put(g, g->mesh, TRUE, res, p, t);
+             ok && g->layer[1] && per_triangle && t < res->poly_tri[p + 1]; t++)
+            ok = add_feature(gf, g, TRUE, res, p, t);
     }
+    if (!ok && gf)
+    {
+        drop_features(user, gf);
+        gf = NULL;
+    }
+    return gf;
+}
+
+/* Writes block res's features (prep, or made here) to their layers. */
+static int write_block(void *user, wm_block_result *res, void *prep)
+{
+    gen_sink *g = user;
+    gen_features *gf = prep ? prep : make_features(user, res);
+    int ok = gf != NULL;
+    for (size_t i = 0; ok && i < gf->n; i++)
+        ok =
+            OGR_L_CreateFeature(g->layer[gf->mesh[i]], gf->f[i]) == OGRERR_NONE;
     if (!ok)
         CPLError(CE_Failure, CPLE_AppDefined,
-                 "WATERMESH: writing block (%lld, %lld) failed.",
-                 (long long)res->bx, (long long)res->by);
+                 "WATERMESH: writing block (%lld, %lld) failed%s.",
+                 (long long)res->bx, (long long)res->by,
+                 gf ? "" : ": out of memory");
+    if (gf)
+        drop_features(user, gf);
     wm_block_result_free(res);
     return ok;
 }
@@ -633,7 +762,7 @@ int WMShardBlockCount(const WMScene *s, const double *spat, uint64_t *count)
     return ok;
 }
 
-CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
+CPLErr WMSceneRun(const WMScene *s, const WMBlockSink *sink,
                   GDALProgressFunc pfn, void *pArg)
 {
     const double *spat = s->params.have_spat ? s->params.spat : NULL;
@@ -669,7 +798,7 @@ CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
                             (double)(done + n) / (double)total, pfn, pArg)
                       : NULL;
             WMRunStats st;
-            err = WMRunBlocks(s, batch, n, sink, user,
+            err = WMRunBlocks(s, batch, n, sink,
                               scaled ? GDALScaledProgress : pfn,
                               scaled ? scaled : pArg, &st);
             GDALDestroyScaledProgress(scaled);
@@ -692,8 +821,12 @@ CPLErr WMSceneRun(const WMScene *s, WMBlockSink sink, void *user,
 CPLErr WMSceneGenerate(const WMScene *s, OGRLayerH hWater, OGRLayerH hMesh,
                        GDALProgressFunc pfn, void *pArg)
 {
-    gen_sink g = {s, hWater, hMesh};
-    return WMSceneRun(s, write_block, &g, pfn, pArg);
+    gen_sink g = {s,
+                  {hWater, hMesh},
+                  {hWater ? OGR_L_GetLayerDefn(hWater) : NULL,
+                   hMesh ? OGR_L_GetLayerDefn(hMesh) : NULL}};
+    const WMBlockSink sink = {write_block, make_features, drop_features, &g};
+    return WMSceneRun(s, &sink, pfn, pArg);
 }
 
 CPLErr WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes, OGRLayerH hWater,
