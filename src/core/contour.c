@@ -413,65 +413,54 @@ wm_status wm_contour_extract(const wm_field *f, wm_rings *out,
     return wm_contour_extract_probed(f, NULL, out, ctx);
 }
 
-wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
-                                    wm_rings *out, const wm_ctx *ctx)
+static wm_status nomem(const wm_ctx *ctx)
 {
-    wm_status st = WM_OK;
-    state s;
-    memset(&s, 0, sizeof s);
-    s.n = f->w - 1;
-    size_t *slot = NULL, *bnd = NULL;
-    entry *ent = NULL;
-    size_t nent = 0;
-    wm_rings_clear(out);
-    if (f->w != f->h || f->w < 2 || (int64_t)(f->w - 1) * WM_Q > WM_LOCAL_MAX)
-        return wm_fail(ctx, WM_ERR_INVALID, "contour: bad block field");
-    const int32_t n = s.n, S = n * WM_Q;
-    if (probe && (st = wm_hidden_find(f, probe, &s.hid, ctx)) != WM_OK)
-        goto cleanup;
+    return wm_fail(ctx, WM_ERR_NOMEM, "out of memory extracting contours");
+}
 
+/* Step 1: the segments of every mixed tile's cells, then those of the
+ * ambiguous cells (rebuilt exactly from the probe's inputs); *ntileseg:
+ * how many came from the tiles. */
+static wm_status all_segments(state *s, const wm_field *f, wm_probe *probe,
+                              size_t *ntileseg, const wm_ctx *ctx)
+{
+    wm_status st;
+    if (probe && (st = wm_hidden_find(f, probe, &s->hid, ctx)) != WM_OK)
+        return st;
     size_t hc[2] = {0, 0}; /* ambiguous and linked cells of the tiles so far */
     for (size_t k = 0; k < f->mixed; k++)
     {
         if (wm_cancelled(ctx))
-        {
-            st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
-            goto cleanup;
-        }
-        if (!tile_segments(&s, f, k, hc))
-            goto nomem;
+            return wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+        if (!tile_segments(s, f, k, hc))
+            return nomem(ctx);
     }
-    const size_t ntileseg = s.nsegs;
-    if (s.hid.ncell &&
-        (st = wm_hidden_cells(f, probe, &s.hid, push_ambiguous, &s)) != WM_OK)
-        goto nomem;
+    *ntileseg = s->nsegs;
+    if (s->hid.ncell &&
+        wm_hidden_cells(f, probe, &s->hid, push_ambiguous, s) != WM_OK)
+        return nomem(ctx);
+    return s->nsegs < NO_SEG ? WM_OK : nomem(ctx); /* links: 32 bits */
+}
 
-    if (s.nsegs >= NO_SEG)
-        goto nomem; /* links need 32 bits */
-    ent = malloc((s.nsegs + 1) * sizeof *ent);
-    bnd = malloc((s.nsegs + 1) * sizeof *bnd);
-    if (!ent || !bnd)
-        goto nomem;
-    /* next links chains: inside a tile through a map from cell to its
-     * first segment, across tiles through a hash of the segments entering
-     * over a tile side */
-    size_t nbnd = link_tiles(&s, bnd);
-    for (size_t i = ntileseg; i < s.nsegs; i++)
-        bnd[nbnd++] = i;
+/* Step 2b: links the segments of bnd[0 .. nbnd) whose out edge crosses
+ * into another tile (or an ambiguous cell) to the one whose in edge is the
+ * same crossing, through an open-addressing hash; 0 when out of memory. */
+static int link_across(state *s, const size_t *bnd, size_t nbnd)
+{
     size_t hcap = 16;
     while (hcap < 2 * nbnd + 2)
         hcap *= 2;
-    slot = malloc(hcap * sizeof *slot);
+    size_t *slot = malloc(hcap * sizeof *slot);
     if (!slot)
-        goto nomem;
+        return 0;
     for (size_t i = 0; i < hcap; i++)
         slot[i] = SIZE_MAX;
     for (size_t b = 0; b < nbnd; b++)
     {
         const size_t i = bnd[b];
-        if (!crosses_tile(&s, i, 1))
+        if (!crosses_tile(s, i, 1))
             continue;
-        size_t h = hash64(pt_key(s.segs[i].in_pt), hcap - 1);
+        size_t h = hash64(pt_key(s->segs[i].in_pt), hcap - 1);
         while (slot[h] != SIZE_MAX)
             h = (h + 1) & (hcap - 1);
         slot[h] = i;
@@ -479,134 +468,192 @@ wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
     for (size_t b = 0; b < nbnd; b++)
     {
         const size_t i = bnd[b];
-        if (!crosses_tile(&s, i, 0))
+        if (!crosses_tile(s, i, 0))
             continue;
-        const uint64_t key = pt_key(s.segs[i].out_pt);
+        const uint64_t key = pt_key(s->segs[i].out_pt);
         size_t h = hash64(key, hcap - 1);
         while (slot[h] != SIZE_MAX)
         {
-            if (pt_key(s.segs[slot[h]].in_pt) == key)
+            if (pt_key(s->segs[slot[h]].in_pt) == key)
             {
-                s.segs[i].next = (uint32_t)slot[h];
-                s.segs[slot[h]].flags |= HAS_PRED;
+                s->segs[i].next = (uint32_t)slot[h];
+                s->segs[slot[h]].flags |= HAS_PRED;
                 break;
             }
             h = (h + 1) & (hcap - 1);
         }
     }
-    /* chain starts: entries on the block square (a chain that starts or
-     * ends inside the block is a linking fault, never closed along it) */
-    for (size_t i = 0; i < s.nsegs; i++)
+    free(slot);
+    return 1;
+}
+
+/* Step 2: every segment's next, inside a tile through a map from cell to
+ * its first segment (link_tiles), across tiles through the hash. */
+static int link_all(state *s, size_t ntileseg)
+{
+    size_t *bnd = malloc((s->nsegs + 1) * sizeof *bnd);
+    if (!bnd)
+        return 0;
+    size_t nbnd = link_tiles(s, bnd);
+    for (size_t i = ntileseg; i < s->nsegs; i++)
+        bnd[nbnd++] = i;
+    const int ok = link_across(s, bnd, nbnd);
+    free(bnd);
+    return ok;
+}
+
+/* Step 3: the chain starts, sorted by their place on the block square's
+ * perimeter (side S) into ent[0 .. *nent); a chain that starts or ends
+ * inside the block is a linking fault, never closed along it. */
+static wm_status chain_starts(const state *s, int32_t S, entry *ent,
+                              size_t *nent, const wm_ctx *ctx)
+{
+    *nent = 0;
+    for (size_t i = 0; i < s->nsegs; i++)
     {
-        const seg *g = &s.segs[i];
+        const seg *g = &s->segs[i];
         if ((!(g->flags & HAS_PRED) && !on_square(g->in_pt, S)) ||
             (g->next == NO_SEG && !on_square(g->out_pt, S)))
-        {
-            st = wm_fail(ctx, WM_ERR_INTERNAL,
-                         "contour: a chain ends inside the block");
-            goto cleanup;
-        }
+            return wm_fail(ctx, WM_ERR_INTERNAL,
+                           "contour: a chain ends inside the block");
         if (!(g->flags & HAS_PRED))
         {
-            ent[nent].pos = perim(g->in_pt, S);
-            ent[nent].seg = i;
-            nent++;
+            ent[*nent].pos = perim(g->in_pt, S);
+            ent[*nent].seg = i;
+            (*nent)++;
         }
     }
-    qsort(ent, nent, sizeof *ent, cmp_entry);
+    qsort(ent, *nent, sizeof *ent, cmp_entry);
+    return WM_OK;
+}
 
-    /* open chains, closed along the square */
+/* Walks the square counter-clockwise from exit position p (of perimeter
+ * 4 S) to the next entry of ent[0 .. nent), adding the corners passed;
+ * returns that entry's index, or SIZE_MAX when out of memory. */
+static size_t along_square(const entry *ent, size_t nent, int64_t p, int32_t S,
+                           wm_rings *out)
+{
+    size_t lo = 0, hi = nent; /* first entry with pos > p */
+    while (lo < hi)
+    {
+        const size_t mid = (lo + hi) / 2;
+        if (ent[mid].pos > p)
+            hi = mid;
+        else
+            lo = mid + 1;
+    }
+    const size_t nx = lo == nent ? 0 : lo;
+    const int64_t q = ent[nx].pos + (nx == lo ? 0 : 4 * (int64_t)S);
+    for (int64_t k = 1; k <= 8; k++)
+    {
+        const int64_t cpos = (p / S + k) * S;
+        if (cpos >= q)
+            break;
+        const int64_t m = (cpos / S) & 3;
+        const wm_pt corner = {m == 1 || m == 2 ? S : 0, m >= 2 ? S : 0};
+        if (wm_rings_push(out, corner) != WM_OK)
+            return SIZE_MAX;
+    }
+    return nx;
+}
+
+/* Step 4: the rings of the chains that start on the square, closed along
+ * it. */
+static wm_status open_chains(state *s, const entry *ent, size_t nent, int32_t S,
+                             wm_rings *out, const wm_ctx *ctx)
+{
     for (size_t e = 0; e < nent; e++)
     {
-        if (s.segs[ent[e].seg].flags & USED)
+        if (s->segs[ent[e].seg].flags & USED)
             continue;
-        size_t cur = e;
-        for (;;)
+        for (size_t cur = e; !(s->segs[ent[cur].seg].flags & USED);)
         {
-            size_t g = ent[cur].seg;
-            if (s.segs[g].flags & USED)
-                break; /* ring closed */
-            if (wm_rings_push(out, s.segs[g].in_pt) != WM_OK)
-                goto nomem;
-            size_t last = g;
-            for (; g != NO_SEG; g = s.segs[g].next)
+            size_t g = ent[cur].seg, last = g;
+            if (wm_rings_push(out, s->segs[g].in_pt) != WM_OK)
+                return nomem(ctx);
+            for (; g != NO_SEG; g = s->segs[g].next)
             {
-                if (s.segs[g].flags & USED)
-                {
-                    st = wm_fail(ctx, WM_ERR_INTERNAL, "contour: chain loops");
-                    goto cleanup;
-                }
-                s.segs[g].flags |= USED;
+                if (s->segs[g].flags & USED)
+                    return wm_fail(ctx, WM_ERR_INTERNAL,
+                                   "contour: chain loops");
+                s->segs[g].flags |= USED;
                 last = g;
-                if (wm_rings_push(out, s.segs[g].out_pt) != WM_OK)
-                    goto nomem;
+                if (wm_rings_push(out, s->segs[g].out_pt) != WM_OK)
+                    return nomem(ctx);
             }
-            /* walk the square CCW to the next entry, adding corners */
-            const int64_t p = perim(s.segs[last].out_pt, S);
-            size_t lo = 0, hi = nent; /* first entry with pos > p */
-            while (lo < hi)
-            {
-                size_t mid = (lo + hi) / 2;
-                if (ent[mid].pos > p)
-                    hi = mid;
-                else
-                    lo = mid + 1;
-            }
-            const size_t nx = lo == nent ? 0 : lo;
-            const int64_t q = ent[nx].pos + (nx == lo ? 0 : 4 * (int64_t)S);
-            for (int64_t k = 1; k <= 8; k++)
-            {
-                const int64_t cpos = (p / S + k) * S;
-                if (cpos >= q)
-                    break;
-                const int64_t m = (cpos / S) & 3;
-                const wm_pt corner = {m == 1 || m == 2 ? S : 0, m >= 2 ? S : 0};
-                if (wm_rings_push(out, corner) != WM_OK)
-                    goto nomem;
-            }
-            cur = nx;
+            cur =
+                along_square(ent, nent, perim(s->segs[last].out_pt, S), S, out);
+            if (cur == SIZE_MAX)
+                return nomem(ctx);
         }
         if (wm_rings_close(out) != WM_OK)
-            goto nomem;
+            return nomem(ctx);
     }
-    /* closed loops inside the block */
-    for (size_t i = 0; i < s.nsegs; i++)
+    return WM_OK;
+}
+
+/* Step 5: the rings of the closed loops inside the block. */
+static wm_status closed_loops(state *s, wm_rings *out, const wm_ctx *ctx)
+{
+    for (size_t i = 0; i < s->nsegs; i++)
     {
-        if (s.segs[i].flags & USED)
+        if (s->segs[i].flags & USED)
             continue;
-        for (size_t g = i; !(s.segs[g].flags & USED); g = s.segs[g].next)
+        for (size_t g = i; !(s->segs[g].flags & USED); g = s->segs[g].next)
         {
-            if (s.segs[g].next == NO_SEG)
-            {
-                st = wm_fail(ctx, WM_ERR_INTERNAL, "contour: open chain");
-                goto cleanup;
-            }
-            s.segs[g].flags |= USED;
-            if (wm_rings_push(out, s.segs[g].out_pt) != WM_OK)
-                goto nomem;
+            if (s->segs[g].next == NO_SEG)
+                return wm_fail(ctx, WM_ERR_INTERNAL, "contour: open chain");
+            s->segs[g].flags |= USED;
+            if (wm_rings_push(out, s->segs[g].out_pt) != WM_OK)
+                return nomem(ctx);
         }
         if (wm_rings_close(out) != WM_OK)
-            goto nomem;
+            return nomem(ctx);
     }
-    /* no crossing on the square at all: the square is water or land */
-    if (nent == 0 && wm_field_at(f, 0, 0) <= 0)
-    {
-        const wm_pt sq[4] = {{0, 0}, {S, 0}, {S, S}, {0, S}};
-        for (int k = 0; k < 4; k++)
-            if (wm_rings_push(out, sq[k]) != WM_OK)
-                goto nomem;
-        if (wm_rings_close(out) != WM_OK)
-            goto nomem;
-    }
-    goto cleanup;
-nomem:
-    st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory extracting contours");
-cleanup:
+    return WM_OK;
+}
+
+/* Step 6: with no crossing on the square at all, the square is water or
+ * land: one ring, or none. */
+static wm_status whole_square(const wm_field *f, int32_t S, wm_rings *out,
+                              const wm_ctx *ctx)
+{
+    if (wm_field_at(f, 0, 0) > 0)
+        return WM_OK;
+    const wm_pt sq[4] = {{0, 0}, {S, 0}, {S, S}, {0, S}};
+    for (int k = 0; k < 4; k++)
+        if (wm_rings_push(out, sq[k]) != WM_OK)
+            return nomem(ctx);
+    return wm_rings_close(out) == WM_OK ? WM_OK : nomem(ctx);
+}
+
+wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
+                                    wm_rings *out, const wm_ctx *ctx)
+{
+    wm_rings_clear(out);
+    if (f->w != f->h || f->w < 2 || (int64_t)(f->w - 1) * WM_Q > WM_LOCAL_MAX)
+        return wm_fail(ctx, WM_ERR_INVALID, "contour: bad block field");
+    state s;
+    memset(&s, 0, sizeof s);
+    s.n = f->w - 1;
+    const int32_t S = s.n * WM_Q;
+    entry *ent = NULL;
+    size_t ntileseg = 0, nent = 0;
+    wm_status st = all_segments(&s, f, probe, &ntileseg, ctx);
+    if (st == WM_OK && (!link_all(&s, ntileseg) ||
+                        !(ent = malloc((s.nsegs + 1) * sizeof *ent))))
+        st = nomem(ctx);
+    if (st == WM_OK)
+        st = chain_starts(&s, S, ent, &nent, ctx);
+    if (st == WM_OK)
+        st = open_chains(&s, ent, nent, S, out, ctx);
+    if (st == WM_OK)
+        st = closed_loops(&s, out, ctx);
+    if (st == WM_OK && nent == 0)
+        st = whole_square(f, S, out, ctx);
     free(s.segs);
     free(s.tiles);
     wm_hidden_free(&s.hid);
-    free(bnd);
-    free(slot);
     free(ent);
     return st;
 }
