@@ -988,8 +988,17 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
         goto nomem;
     for (int32_t ty = 0; ty < f->nty; ty++)
         for (int32_t tx = 0; tx < f->ntx; tx++)
+        {
+            const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+            /* most tiles of a sparse block: nothing in reach and no lake's
+             * box, land as they are (kind 0) */
+            if (wk.tseg_start[t] == wk.tseg_start[t + 1] &&
+                wk.tedge_start[t] == wk.tedge_start[t + 1] &&
+                wk.tpoly_start[t] == wk.tpoly_start[t + 1])
+                continue;
             if (!uniform_tile(&wk, tx, ty, haspoly))
-                cand[ncand++] = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+                cand[ncand++] = t;
+        }
 
     /* the C path gains nothing from large batches: small ones stay in the
      * cache */
