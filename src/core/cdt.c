@@ -116,6 +116,11 @@ typedef struct
     ivec pend;       /* (new half-edge, old half-edge, old twin) triples */
 } mesh;
 
+static wm_status cdt_nomem(const mesh *m)
+{
+    return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+}
+
 /* The vertex number inside the mesh of the caller's vertex x, and the
  * caller's number of mesh vertex x (not a super vertex): the three super
  * vertices sit between the polygon's vertices and the points added. */
@@ -258,11 +263,11 @@ static wm_status lawson(mesh *m, int from_point, size_t budget)
         budget--;
         flip(m, h);
         if (!ivec_push(&m->stack, h) || !ivec_push(&m->stack, nxt(g)))
-            return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+            return cdt_nomem(m);
         if (!from_point)
         {
             if (!ivec_push(&m->stack, nxt(h)) || !ivec_push(&m->stack, g))
-                return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+                return cdt_nomem(m);
         }
     }
     return WM_OK;
@@ -384,7 +389,7 @@ static wm_status insert_point(mesh *m, int32_t pi)
         pair_twins(m, 3 * t2 + 1, 3 * t + 2);
         if (!ivec_push(&m->stack, 3 * t) || !ivec_push(&m->stack, 3 * t1) ||
             !ivec_push(&m->stack, 3 * t2))
-            return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+            return cdt_nomem(m);
     }
     else
     {
@@ -424,7 +429,7 @@ static wm_status insert_point(mesh *m, int32_t pi)
         pair_twins(m, 3 * tc + 2, 3 * td + 1);
         if (!ivec_push(&m->stack, 3 * ta) || !ivec_push(&m->stack, 3 * tb) ||
             !ivec_push(&m->stack, 3 * tc) || !ivec_push(&m->stack, 3 * td))
-            return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+            return cdt_nomem(m);
     }
     m->last = t;
     /* each flip adds one edge at p, so p's degree bounds the flips */
@@ -497,7 +502,7 @@ static wm_status fill_side(mesh *m, chain *c, int32_t parent, size_t *used,
     m->tstk.n = 0;
     if (!ivec_push(&m->tstk, 0) || !ivec_push(&m->tstk, (int32_t)k) ||
         !ivec_push(&m->tstk, parent))
-        return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        return cdt_nomem(m);
     *top = -1;
     while (m->tstk.n > 0)
     {
@@ -517,7 +522,7 @@ static wm_status fill_side(mesh *m, chain *c, int32_t parent, size_t *used,
                 if (!ivec_push(&m->pend, par) ||
                     !ivec_push(&m->pend, c->hc.a[lo]) ||
                     !ivec_push(&m->pend, c->o.a[lo]))
-                    return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+                    return cdt_nomem(m);
             }
             else
                 pair_twins(m, par, c->o.a[lo]);
@@ -571,7 +576,7 @@ static wm_status fill_side(mesh *m, chain *c, int32_t parent, size_t *used,
             !ivec_push(&m->tstk, h + 1) ||
             !ivec_push(&m->tstk, (int32_t)best) ||
             !ivec_push(&m->tstk, (int32_t)hi) || !ivec_push(&m->tstk, h + 2))
-            return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+            return cdt_nomem(m);
     }
     return WM_OK;
 }
@@ -598,16 +603,16 @@ static void ivec_reverse(ivec *s)
     }
 }
 
-/* Inserts ring edge a-b as a constraint. */
-static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
+/* Step 1 of insert_constraint: around a, the edge a-b (marked: *start
+ * stays -1) or the half-edge h of the triangle (a, v1, v2) whose open wedge
+ * at a holds the direction to b (*start = h). */
+static wm_status find_wedge(mesh *m, int32_t a, int32_t b, int32_t *start)
 {
     const wm_pt pa = m->p[a], pb = m->p[b];
-
-    /* 1. Around a, find the edge a-b or the triangle (a, v1, v2) whose open
-     *    wedge at a holds the direction to b. */
     const int32_t h0 = m->ve[a];
-    int32_t h = h0, start = -1;
+    int32_t h = h0;
     size_t guard = 0;
+    *start = -1;
     do
     {
         const int32_t v1 = m->v[nxt(h)], v2 = m->v[prv(h)];
@@ -623,22 +628,25 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
                            (int)a, (int)b);
         if (o1 > 0 && wm_orient(pa, m->p[v2], pb) < 0)
         {
-            start = h;
-            break;
+            *start = h;
+            return WM_OK;
         }
         h = m->tw[prv(h)];
         if (h < 0 || ++guard > 3 * (size_t)m->ntri)
             return wm_fail(m->ctx, WM_ERR_INTERNAL,
                            "cdt: broken vertex star at %d", (int)a);
     } while (h != h0);
-    if (start < 0)
-        return wm_fail(m->ctx, WM_ERR_INTERNAL,
-                       "cdt: no triangle at %d towards %d", (int)a, (int)b);
+    return wm_fail(m->ctx, WM_ERR_INTERNAL, "cdt: no triangle at %d towards %d",
+                   (int)a, (int)b);
+}
 
-    /* 2. Walk along a->b through the triangles it crosses (the cavity),
-     *    collecting the polygons on its right and left. The edge we leave a
-     *    triangle by runs from the right side to the left one; g is its
-     *    twin in the next triangle, whose third vertex w is new. */
+/* Step 2: walks along a->b from half-edge start through the triangles it
+ * crosses (the cavity), collecting the polygons on its right and left. The
+ * edge we leave a triangle by runs from the right side to the left one; g
+ * is its twin in the next triangle, whose third vertex w is new. */
+static wm_status walk_cavity(mesh *m, int32_t a, int32_t b, int32_t start)
+{
+    const wm_pt pa = m->p[a], pb = m->p[b];
     m->cid++;
     for (int s = 0; s < 2; s++)
     {
@@ -651,12 +659,11 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
         !chain_push(m, 1, a, prv(start)) ||
         !ivec_push(&m->side[0].v, m->v[nxt(start)]) ||
         !ivec_push(&m->side[1].v, m->v[prv(start)]))
-        return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        return cdt_nomem(m);
     m->tstamp[start / 3] = m->cid;
     m->vstamp[m->v[nxt(start)]] = 2 * m->cid;
     m->vstamp[m->v[prv(start)]] = 2 * m->cid + 1;
-    int32_t cur = nxt(start);
-    for (;;)
+    for (int32_t cur = nxt(start);;)
     {
         const int32_t g = m->tw[cur];
         if (g < 0 || m->cav.n > (size_t)m->ntri)
@@ -668,43 +675,35 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
                            "cdt: ring edge %d-%d crosses ring edge %d-%d",
                            (int)a, (int)b, (int)m->v[g], (int)m->v[nxt(g)]);
         if (!ivec_push(&m->cav, g / 3))
-            return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+            return cdt_nomem(m);
         m->tstamp[g / 3] = m->cid;
         const int32_t w = m->v[prv(g)];
-        int ok;
         if (w == b)
-        {
-            ok = ivec_push(&m->side[0].hc, nxt(g)) &&
-                 ivec_push(&m->side[0].v, b) &&
-                 ivec_push(&m->side[1].hc, prv(g)) &&
-                 ivec_push(&m->side[1].v, b);
-            if (!ok)
-                return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
-            break;
-        }
+            return ivec_push(&m->side[0].hc, nxt(g)) &&
+                           ivec_push(&m->side[0].v, b) &&
+                           ivec_push(&m->side[1].hc, prv(g)) &&
+                           ivec_push(&m->side[1].v, b)
+                       ? WM_OK
+                       : cdt_nomem(m);
         const int o = wm_orient(pa, pb, m->p[w]);
         if (o == 0)
             return wm_fail(m->ctx, WM_ERR_INVALID,
                            "cdt: vertex %d lies on ring edge %d-%d", (int)w,
                            (int)a, (int)b);
         /* chain_push stores the vertex and the edge reaching it */
-        if (o > 0)
-        {
-            ok = chain_push(m, 1, w, prv(g));
-            cur = nxt(g);
-        }
-        else
-        {
-            ok = chain_push(m, 0, w, nxt(g));
-            cur = prv(g);
-        }
+        const int ok =
+            o > 0 ? chain_push(m, 1, w, prv(g)) : chain_push(m, 0, w, nxt(g));
         if (!ok)
-            return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+            return cdt_nomem(m);
+        cur = o > 0 ? nxt(g) : prv(g);
     }
+}
 
-    /* 3. Both sides as counter-clockwise polygons closed by the constraint:
-     *    right = a .. b, left = b .. a. Record what lies outside each edge
-     *    before the cavity triangles are overwritten. */
+/* Step 3: both sides as counter-clockwise polygons closed by the
+ * constraint: right = a .. b, left = b .. a. Records what lies outside
+ * each edge before the cavity triangles are overwritten. */
+static wm_status close_sides(mesh *m, int32_t a, int32_t b)
+{
     ivec_reverse(&m->side[1].v);
     ivec_reverse(&m->side[1].hc);
     size_t need = 0;
@@ -717,7 +716,7 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
             const int32_t hc = c->hc.a[j], o = m->tw[hc];
             if (!ivec_push(&c->o, o) || !ivec_push(&c->fl, m->con[hc]) ||
                 !ivec_push(&c->anten, o >= 0 && m->tstamp[o / 3] == m->cid))
-                return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+                return cdt_nomem(m);
         }
         need += c->v.n - 2; /* a polygon of n vertices: n - 2 triangles */
     }
@@ -725,8 +724,12 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
         return wm_fail(m->ctx, WM_ERR_INTERNAL,
                        "cdt: cavity of %d-%d has %zu triangles, needs %zu",
                        (int)a, (int)b, m->cav.n, need);
+    return WM_OK;
+}
 
-    /* 4. Re-triangulate both sides; link the two halves of a-b. */
+/* Step 4: re-triangulates both sides and links the two halves of a-b. */
+static wm_status refill(mesh *m)
+{
     size_t used = 0;
     int32_t top_r, top_l;
     wm_status st = fill_side(m, &m->side[0], -1, &used, &top_r);
@@ -749,12 +752,16 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
                            "cdt: unpaired dangling edge");
         pair_twins(m, m->pend.a[i], m->pend.a[j]);
     }
+    return WM_OK;
+}
 
-    /* 5. The new triangles must all be counter-clockwise. Since they form
-     *    a disk whose boundary is the cavity's, every point is then covered
-     *    as many times as the cavity boundary winds around it: once inside,
-     *    never outside. This certifies the step, whatever the subtleties of
-     *    repeated vertices. */
+/* Step 5: the new triangles must all be counter-clockwise. Since they form
+ * a disk whose boundary is the cavity's, every point is then covered as
+ * many times as the cavity boundary winds around it: once inside, never
+ * outside. This certifies the step, whatever the subtleties of repeated
+ * vertices. */
+static wm_status check_cavity(mesh *m, int32_t a, int32_t b)
+{
     for (size_t i = 0; i < m->cav.n; i++)
     {
         const int32_t t = m->cav.a[i];
@@ -765,6 +772,19 @@ static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
                            (int)b);
     }
     return WM_OK;
+}
+
+/* Inserts ring edge a-b as a constraint. */
+static wm_status insert_constraint(mesh *m, int32_t a, int32_t b)
+{
+    int32_t start;
+    wm_status st = find_wedge(m, a, b, &start);
+    if (st != WM_OK || start < 0)
+        return st; /* an error, or a-b an edge already (marked) */
+    if ((st = walk_cavity(m, a, b, start)) == WM_OK &&
+        (st = close_sides(m, a, b)) == WM_OK && (st = refill(m)) == WM_OK)
+        st = check_cavity(m, a, b);
+    return st;
 }
 
 /* Spreads the low 25 bits of v to the even bit positions. */
@@ -968,7 +988,7 @@ static wm_status certify(mesh *m, const uint8_t *state, size_t n)
             continue;
         for (int32_t h = 3 * (int32_t)t; h < 3 * (int32_t)t + 3; h++)
             if (!m->con[h] && m->tw[h] > h && !ivec_push(&m->stack, h))
-                return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+                return cdt_nomem(m);
     }
     return lawson(m, 0, 32 * n + 1024);
 }
@@ -1060,7 +1080,7 @@ static wm_status build(mesh *m, const wm_pt *pts, const size_t *ring_start,
     {
         free(state);
         free(queue);
-        return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        return cdt_nomem(m);
     }
     st = flood_fill(m, state, queue);
     free(queue);
@@ -1091,7 +1111,7 @@ static wm_status export_tris(const mesh *m, size_t inside, uint32_t **tris,
         free(out);
         free(at);
         free(tw);
-        return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        return cdt_nomem(m);
     }
     size_t k = 0;
     for (size_t t = 0; t < (size_t)m->ntri; t++)
@@ -1278,7 +1298,7 @@ static wm_status relabel(wm_cdt *c)
     mesh *m = &c->m;
     int32_t *queue = alloc_n((size_t)m->ntri, sizeof *queue);
     if (!queue)
-        return wm_fail(m->ctx, WM_ERR_NOMEM, "cdt: out of memory");
+        return cdt_nomem(m);
     memset(m->state, 0, (size_t)m->ntri);
     wm_status st = flood_fill(m, m->state, queue);
     free(queue);
