@@ -440,6 +440,290 @@ static int write_output(const WMScene *scene, GDALDriverH drv, const char *path,
     return ok;
 }
 
+/* The command line, parsed. */
+typedef struct
+{
+    char **opts, **lco, **dsco;            /* owned */
+    const char *format, *descriptor, *dst; /* dst without a trailing / */
+    char *own;                             /* what dst or descriptor is */
+    int overwrite, show_progress, quiet, stats, list, resume;
+    const char *shard, *shard_env, *shard_plan, *blocks;
+} cli;
+
+static void cli_free(cli *c)
+{
+    CSLDestroy(c->opts);
+    CSLDestroy(c->lco);
+    CSLDestroy(c->dsco);
+    CPLFree(c->own);
+}
+
+/* -NAME value for an option of the driver (WM_OPTION_NAMES), any case. */
+static void add_option(cli *c, const char *a, const char *value)
+{
+    char *name = CPLStrdup(a + 1);
+    for (char *p = name; *p; p++)
+        *p = (char)toupper((unsigned char)*p);
+    int known = FALSE;
+    for (int k = 0; WM_OPTION_NAMES[k]; k++)
+        known |= EQUAL(name, WM_OPTION_NAMES[k]);
+    if (!known || !value)
+    {
+        fprintf(stderr, "ERROR: unknown option or missing value: %s\n", a);
+        CPLFree(name);
+        usage(1);
+    }
+    c->opts = CSLSetNameValue(c->opts, name, value);
+    CPLFree(name);
+}
+
+/* argv[*i] (and its values) when it is one of the flags of the command
+ * itself; FALSE otherwise. */
+static int cli_flag(cli *c, int argc, char **argv, int *i)
+{
+    const char *a = argv[*i];
+    const char *next = *i + 1 < argc ? argv[*i + 1] : NULL;
+    const char **value = EQUAL(a, "-of")           ? &c->format
+                         : EQUAL(a, "-shard")      ? &c->shard
+                         : EQUAL(a, "-shard-env")  ? &c->shard_env
+                         : EQUAL(a, "-shard-plan") ? &c->shard_plan
+                         : EQUAL(a, "-blocks")     ? &c->blocks
+                                                   : NULL;
+    int *flag = EQUAL(a, "-overwrite")                 ? &c->overwrite
+                : EQUAL(a, "-progress")                ? &c->show_progress
+                : EQUAL(a, "-q") || EQUAL(a, "-quiet") ? &c->quiet
+                : EQUAL(a, "-stats")                   ? &c->stats
+                : EQUAL(a, "-list-blocks")             ? &c->list
+                : EQUAL(a, "-resume")                  ? &c->resume
+                                                       : NULL;
+    if (EQUAL(a, "--help") || EQUAL(a, "-h"))
+        usage(0);
+    if (value && next)
+        *value = argv[++*i];
+    else if (flag)
+        *flag = TRUE;
+    else if ((EQUAL(a, "-lco") || EQUAL(a, "-dsco")) && next)
+    {
+        char ***list = EQUAL(a, "-lco") ? &c->lco : &c->dsco;
+        *list = CSLAddString(*list, argv[++*i]);
+    }
+    else if (EQUAL(a, "-spat"))
+    {
+        if (*i + 4 >= argc)
+        {
+            fprintf(stderr, "ERROR: -spat needs 4 values.\n");
+            usage(1);
+        }
+        char *v =
+            CPLStrdup(CPLSPrintf("%s,%s,%s,%s", argv[*i + 1], argv[*i + 2],
+                                 argv[*i + 3], argv[*i + 4]));
+        c->opts = CSLSetNameValue(c->opts, "SPAT", v);
+        CPLFree(v);
+        *i += 4;
+    }
+    else
+        return FALSE;
+    return TRUE;
+}
+
+/* Parses the command line into c (exits through usage() when it is
+ * wrong). */
+static void parse_args(int argc, char **argv, cli *c)
+{
+    memset(c, 0, sizeof *c);
+    const char *dst = NULL;
+    for (int i = 1; i < argc; i++)
+    {
+        const char *a = argv[i];
+        if (cli_flag(c, argc, argv, &i))
+            continue;
+        if (a[0] == '-' && a[1] && !(a[1] >= '0' && a[1] <= '9'))
+        {
+            add_option(c, a, i + 1 < argc ? argv[i + 1] : NULL);
+            i++;
+        }
+        else if (!dst)
+            dst = a;
+        else if (!c->descriptor)
+        {
+            c->descriptor = dst;
+            dst = a;
+        }
+        else
+        {
+            fprintf(stderr, "ERROR: too many arguments: %s\n", a);
+            usage(1);
+        }
+    }
+    c->own = dst ? CPLStrdup(dst) : NULL;
+    for (size_t n = c->own ? strlen(c->own) : 0; n > 1 && c->own[n - 1] == '/';)
+        c->own[--n] = '\0';
+    c->dst = c->own;
+    if (c->list && c->dst && !c->descriptor)
+    { /* -list-blocks writes nothing */
+        c->descriptor = c->dst;
+        c->dst = NULL;
+    }
+    if (!c->dst && !c->list)
+    {
+        fprintf(stderr, "ERROR: no destination datasource given.\n");
+        usage(1);
+    }
+}
+
+/* The run's options: the descriptor's, then the command line's; FALSE
+ * (and *all NULL) after a CPLError or message. */
+static int run_options(const cli *c, char ***all)
+{
+    *all = NULL;
+    if (c->descriptor && !(*all = WMReadDescriptor(c->descriptor)))
+        return FALSE;
+    for (char **p = c->opts; p && *p; p++)
+    {
+        char *key = NULL;
+        const char *val = CPLParseNameValue(*p, &key);
+        *all = CSLSetNameValue(*all, key, val);
+        CPLFree(key);
+    }
+    if (c->stats)
+        *all = CSLSetNameValue(*all, "STATS", "YES");
+    int ok =
+        !(c->shard || c->shard_env) || add_shard(all, c->shard, c->shard_env);
+    if (ok && c->shard_plan && !c->shard && !c->shard_env && !c->blocks)
+    {
+        fprintf(stderr, "ERROR: -shard-plan needs -shard or -blocks.\n");
+        ok = FALSE;
+    }
+    if (ok && c->blocks)
+        *all = CSLSetNameValue(*all, "BLOCKS", c->blocks);
+    if (ok && c->shard_plan)
+        *all = CSLSetNameValue(*all, "SHARD_PLAN", c->shard_plan);
+    if (!ok)
+    {
+        CSLDestroy(*all);
+        *all = NULL;
+    }
+    return ok;
+}
+
+/* Refuses targets that exist without -overwrite (before any work). */
+static int targets_free(const char *const targets[2], int overwrite)
+{
+    for (int t = 0; t < 2 && targets[t]; t++)
+    {
+        VSIStatBufL sb;
+        if (VSIStatL(targets[t], &sb) == 0 && !overwrite)
+        {
+            CPLError(CE_Failure, CPLE_AppDefined,
+                     "gdal_watermesh: %s already exists; use -overwrite to "
+                     "replace it.",
+                     targets[t]);
+            return FALSE;
+        }
+    }
+    return TRUE;
+}
+
+/* Writes the scene into a temporary folder beside the destination (drv, or
+ * glTF with drv NULL), then puts every target in place; FALSE after an
+ * error, with nothing left at the targets but what was there. */
+static int write_job(const cli *c, const WMScene *scene, GDALDriverH drv,
+                     const char *const targets[2])
+{
+    char *dstdir = CPLStrdup(CPLGetPath(c->dst));
+    if (!*dstdir)
+    {
+        CPLFree(dstdir);
+        dstdir = CPLStrdup(".");
+    }
+    char *tmpdir = CPLStrdup(CPLFormFilename(
+        dstdir, CPLSPrintf(".gdal_watermesh-%ld.tmp", (long)getpid()), NULL));
+    int ok = VSIMkdir(tmpdir, 0755) == 0;
+    if (!ok)
+        CPLError(CE_Failure, CPLE_FileIO,
+                 "gdal_watermesh: cannot create a temporary folder in %s.",
+                 dstdir);
+    if (ok)
+    {
+        signal(SIGINT, on_signal);
+        signal(SIGTERM, on_signal);
+        /* the output is written under tmpdir/new; the files it replaces
+         * wait in tmpdir/old until everything is in place */
+        const int show = c->show_progress && !c->quiet;
+        char *newdir = CPLStrdup(CPLFormFilename(tmpdir, "new", NULL));
+        char *olddir = CPLStrdup(CPLFormFilename(tmpdir, "old", NULL));
+        char *tmpw = CPLStrdup(
+            CPLFormFilename(newdir, CPLGetFilename(targets[0]), NULL));
+        char *tmpm = targets[1] ? CPLStrdup(CPLFormFilename(
+                                      newdir, CPLGetFilename(targets[1]), NULL))
+                                : NULL;
+        ok = VSIMkdir(newdir, 0755) == 0 &&
+             (drv ? write_output(scene, drv, tmpw, tmpm, c->lco, c->dsco, show)
+                  : write_glb(scene, tmpw, show)) &&
+             put_in_place(newdir, olddir, dstdir, targets, c->overwrite, !drv);
+        CPLFree(tmpw);
+        CPLFree(tmpm);
+        CPLFree(newdir);
+        CPLFree(olddir);
+        VSIRmdirRecursive(tmpdir);
+    }
+    CPLFree(tmpdir);
+    CPLFree(dstdir);
+    return ok;
+}
+
+/* The run after the options: output driver, targets, inputs, writing;
+ * the exit code. */
+static int run(const cli *c, char **all)
+{
+    /* -of GLB: a folder of binary glTF files, one per block */
+    const int glb = c->format && EQUAL(c->format, "GLB");
+    GDALDriverH drv = glb         ? NULL
+                      : c->format ? GDALGetDriverByName(c->format)
+                                  : guess_driver(c->dst);
+    if (!drv && !glb)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "gdal_watermesh: no vector driver %s%s.",
+                 c->format ? "named " : "for ", c->format ? c->format : c->dst);
+        return 1;
+    }
+    /* what the run writes: dst, or two files by the single-layer rule;
+     * any of them existing is refused before any work */
+    char *water_dst = NULL, *mesh_dst = NULL;
+    if (!glb && single_layer_file(drv, c->dst))
+    {
+        water_dst = layer_file(drv, c->dst, "water");
+        mesh_dst = layer_file(drv, c->dst, "mesh");
+    }
+    else
+        water_dst = CPLStrdup(c->dst);
+    const char *const targets[2] = {water_dst, mesh_dst};
+    int rc = 1;
+    if (c->resume && done_before(targets, c->quiet))
+        rc = 0;
+    else if (targets_free(targets, c->overwrite))
+    {
+        /* read and check every input before anything is created */
+        WMSources src;
+        WMScene *scene = NULL;
+        if (WMSourcesOpen(all, &src))
+        {
+            scene = WMSceneBuild(src.hRivers, src.hLakes, all);
+            WMSourcesClose(&src);
+        }
+        if (scene && write_job(c, scene, drv, targets))
+            rc = 0;
+        else if (scene && g_interrupted)
+            fprintf(stderr, "ERROR: interrupted; nothing written to %s.\n",
+                    c->dst);
+        WMSceneFree(scene);
+    }
+    CPLFree(water_dst);
+    CPLFree(mesh_dst);
+    return rc;
+}
+
 int main(int argc, char **argv)
 {
 #if defined(__GLIBC__)
@@ -463,241 +747,14 @@ int main(int argc, char **argv)
     if (argc < 1)
         exit(-argc);
 
-    char **opts = NULL, **lco = NULL, **dsco = NULL;
-    const char *format = NULL, *descriptor = NULL, *dst = NULL;
-    char *water_dst = NULL, *mesh_dst = NULL; /* what the run writes */
-    int overwrite = FALSE, show_progress = FALSE, quiet = FALSE, stats = FALSE;
-    int list = FALSE, resume = FALSE;
-    const char *shard = NULL, *shard_env = NULL, *shard_plan = NULL;
-    const char *blocks = NULL;
-    int rc = 1;
-
-    for (int i = 1; i < argc; i++)
-    {
-        const char *a = argv[i];
-        const int more = i + 1 < argc;
-        if (EQUAL(a, "--help") || EQUAL(a, "-h"))
-            usage(0);
-        else if (EQUAL(a, "-of") && more)
-            format = argv[++i];
-        else if (EQUAL(a, "-lco") && more)
-            lco = CSLAddString(lco, argv[++i]);
-        else if (EQUAL(a, "-dsco") && more)
-            dsco = CSLAddString(dsco, argv[++i]);
-        else if (EQUAL(a, "-overwrite"))
-            overwrite = TRUE;
-        else if (EQUAL(a, "-progress"))
-            show_progress = TRUE;
-        else if (EQUAL(a, "-q") || EQUAL(a, "-quiet"))
-            quiet = TRUE;
-        else if (EQUAL(a, "-stats"))
-            stats = TRUE;
-        else if (EQUAL(a, "-list-blocks"))
-            list = TRUE;
-        else if (EQUAL(a, "-resume"))
-            resume = TRUE;
-        else if (EQUAL(a, "-shard") && more)
-            shard = argv[++i];
-        else if (EQUAL(a, "-shard-env") && more)
-            shard_env = argv[++i];
-        else if (EQUAL(a, "-shard-plan") && more)
-            shard_plan = argv[++i];
-        else if (EQUAL(a, "-blocks") && more)
-            blocks = argv[++i];
-        else if (EQUAL(a, "-spat"))
-        {
-            if (i + 4 >= argc)
-            {
-                fprintf(stderr, "ERROR: -spat needs 4 values.\n");
-                usage(1);
-            }
-            char *v =
-                CPLStrdup(CPLSPrintf("%s,%s,%s,%s", argv[i + 1], argv[i + 2],
-                                     argv[i + 3], argv[i + 4]));
-            opts = CSLSetNameValue(opts, "SPAT", v);
-            CPLFree(v);
-            i += 4;
-        }
-        else if (a[0] == '-' && a[1] && !(a[1] >= '0' && a[1] <= '9'))
-        {
-            char *name = CPLStrdup(a + 1);
-            for (char *p = name; *p; p++)
-                *p = (char)toupper((unsigned char)*p);
-            int known = FALSE;
-            for (int k = 0; WM_OPTION_NAMES[k]; k++)
-                known |= EQUAL(name, WM_OPTION_NAMES[k]);
-            if (!known || !more)
-            {
-                fprintf(stderr, "ERROR: unknown option or missing value: %s\n",
-                        a);
-                CPLFree(name);
-                usage(1);
-            }
-            opts = CSLSetNameValue(opts, name, argv[++i]);
-            CPLFree(name);
-        }
-        else if (!dst)
-            dst = a;
-        else if (!descriptor)
-        {
-            descriptor = dst;
-            dst = a;
-        }
-        else
-        {
-            fprintf(stderr, "ERROR: too many arguments: %s\n", a);
-            usage(1);
-        }
-    }
-    char *dst_own = dst ? CPLStrdup(dst) : NULL; /* without a trailing / */
-    for (size_t n = dst_own ? strlen(dst_own) : 0;
-         n > 1 && dst_own[n - 1] == '/';)
-        dst_own[--n] = '\0';
-    dst = dst_own;
-    if (list && dst && !descriptor)
-    {
-        descriptor = dst; /* -list-blocks writes nothing */
-        dst = NULL;
-    }
-    if (!dst && !list)
-    {
-        fprintf(stderr, "ERROR: no destination datasource given.\n");
-        usage(1);
-    }
-
+    cli c;
+    parse_args(argc, argv, &c);
     char **all = NULL;
-    if (descriptor)
-    {
-        all = WMReadDescriptor(descriptor);
-        if (!all)
-            goto end;
-    }
-    for (char **p = opts; p && *p; p++)
-    {
-        char *key = NULL;
-        const char *val = CPLParseNameValue(*p, &key);
-        all = CSLSetNameValue(all, key, val);
-        CPLFree(key);
-    }
-    if (stats)
-        all = CSLSetNameValue(all, "STATS", "YES");
-    if ((shard || shard_env) && !add_shard(&all, shard, shard_env))
-        goto end;
-    if (shard_plan && !shard && !shard_env && !blocks)
-    {
-        fprintf(stderr, "ERROR: -shard-plan needs -shard or -blocks.\n");
-        goto end;
-    }
-    if (blocks)
-        all = CSLSetNameValue(all, "BLOCKS", blocks);
-    if (shard_plan)
-        all = CSLSetNameValue(all, "SHARD_PLAN", shard_plan);
-    if (list)
-    {
-        rc = list_blocks(all) ? 0 : 1;
-        goto end;
-    }
-
-    /* -of GLB: a folder of binary glTF files, one per block */
-    const int glb = format && EQUAL(format, "GLB");
-    GDALDriverH drv = glb      ? NULL
-                      : format ? GDALGetDriverByName(format)
-                               : guess_driver(dst);
-    if (!drv && !glb)
-    {
-        CPLError(CE_Failure, CPLE_AppDefined,
-                 "gdal_watermesh: no vector driver %s%s.",
-                 format ? "named " : "for ", format ? format : dst);
-        goto end;
-    }
-    /* what the run writes: dst, or two files by the single-layer rule;
-     * any of them existing is refused before any work */
-    if (!glb && single_layer_file(drv, dst))
-    {
-        water_dst = layer_file(drv, dst, "water");
-        mesh_dst = layer_file(drv, dst, "mesh");
-    }
-    else
-        water_dst = CPLStrdup(dst);
-    const char *const targets[2] = {water_dst, mesh_dst};
-    if (resume && done_before(targets, quiet))
-    {
-        rc = 0;
-        goto end;
-    }
-    for (int t = 0; t < 2 && targets[t]; t++)
-    {
-        VSIStatBufL sb;
-        if (VSIStatL(targets[t], &sb) == 0 && !overwrite)
-        {
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "gdal_watermesh: %s already exists; use -overwrite to "
-                     "replace it.",
-                     targets[t]);
-            goto end;
-        }
-    }
-
-    /* read and check every input before anything is created */
-    WMSources src;
-    if (!WMSourcesOpen(all, &src))
-        goto end;
-    WMScene *scene = WMSceneBuild(src.hRivers, src.hLakes, all);
-    WMSourcesClose(&src);
-    if (!scene)
-        goto end;
-
-    char *dstdir = CPLStrdup(CPLGetPath(dst));
-    if (!*dstdir)
-    {
-        CPLFree(dstdir);
-        dstdir = CPLStrdup(".");
-    }
-    char *tmpdir = CPLStrdup(CPLFormFilename(
-        dstdir, CPLSPrintf(".gdal_watermesh-%ld.tmp", (long)getpid()), NULL));
-    int ok = VSIMkdir(tmpdir, 0755) == 0;
-    if (!ok)
-        CPLError(CE_Failure, CPLE_FileIO,
-                 "gdal_watermesh: cannot create a temporary folder in %s.",
-                 dstdir);
-    if (ok)
-    {
-        signal(SIGINT, on_signal);
-        signal(SIGTERM, on_signal);
-        /* the output is written under tmpdir/new; the files it replaces
-         * wait in tmpdir/old until everything is in place */
-        char *newdir = CPLStrdup(CPLFormFilename(tmpdir, "new", NULL));
-        char *olddir = CPLStrdup(CPLFormFilename(tmpdir, "old", NULL));
-        char *tmpw =
-            CPLStrdup(CPLFormFilename(newdir, CPLGetFilename(water_dst), NULL));
-        char *tmpm = mesh_dst ? CPLStrdup(CPLFormFilename(
-                                    newdir, CPLGetFilename(mesh_dst), NULL))
-                              : NULL;
-        ok = VSIMkdir(newdir, 0755) == 0 &&
-             (glb ? write_glb(scene, tmpw, show_progress && !quiet)
-                  : write_output(scene, drv, tmpw, tmpm, lco, dsco,
-                                 show_progress && !quiet)) &&
-             put_in_place(newdir, olddir, dstdir, targets, overwrite, glb);
-        CPLFree(tmpw);
-        CPLFree(tmpm);
-        CPLFree(newdir);
-        CPLFree(olddir);
-        VSIRmdirRecursive(tmpdir);
-    }
-    CPLFree(tmpdir);
-    CPLFree(dstdir);
-    WMSceneFree(scene);
-    rc = ok ? 0 : 1;
-    if (!ok && g_interrupted)
-        fprintf(stderr, "ERROR: interrupted; nothing written to %s.\n", dst);
-end:
-    CPLFree(dst_own);
-    CPLFree(water_dst);
-    CPLFree(mesh_dst);
+    int rc = 1;
+    if (run_options(&c, &all))
+        rc = c.list ? (list_blocks(all) ? 0 : 1) : run(&c, all);
     CSLDestroy(all);
-    CSLDestroy(opts);
-    CSLDestroy(lco);
-    CSLDestroy(dsco);
+    cli_free(&c);
     CSLDestroy(argv);
     GDALDestroyDriverManager();
     return rc;
