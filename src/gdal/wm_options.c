@@ -13,6 +13,7 @@
 
 #include <ctype.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -216,229 +217,200 @@ int WMParamsParse(CSLConstList opts, WMParams *p)
     return FALSE;
 }
 
-static int params_parse(CSLConstList opts, WMParams *p)
+/* CPLError(CE_Failure, CPLE_IllegalArg, fmt, ...); FALSE. */
+static int illegal(const char *fmt, ...) CPL_PRINT_FUNC_FORMAT(1, 2);
+static int illegal(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    CPLErrorV(CE_Failure, CPLE_IllegalArg, fmt, ap);
+    va_end(ap);
+    return FALSE;
+}
+
+static int at_least_0(const char *name, double v)
+{
+    return v >= 0 || illegal("WATERMESH: %s=%g must be >= 0.", name, v);
+}
+
+/* WIDTH, PIXEL_SIZE, BLOCK_SIZE (a whole number of pixels, at least two
+ * and at most WM_LOCAL_MAX / WM_Q) and SIMPLIFY. */
+static int parse_grid(CSLConstList opts, WMParams *p)
 {
     if (!number(opts, "WIDTH", 10.0, &p->width) ||
         !number(opts, "PIXEL_SIZE", 0.5, &p->pixel) ||
         !number(opts, "BLOCK_SIZE", 4096.0, &p->block))
         return FALSE;
     if (!(p->width > 0) || p->width > WM_MAX_WIDTH)
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: WIDTH=%g must be positive and at most %g m.",
-                 p->width, WM_MAX_WIDTH);
-        return FALSE;
-    }
+        return illegal("WATERMESH: WIDTH=%g must be positive and at most %g m.",
+                       p->width, WM_MAX_WIDTH);
     if (!(p->pixel > 0))
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: PIXEL_SIZE=%g must be positive.", p->pixel);
-        return FALSE;
-    }
+        return illegal("WATERMESH: PIXEL_SIZE=%g must be positive.", p->pixel);
     if (!(p->block > 0))
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: BLOCK_SIZE=%g must be positive.", p->block);
-        return FALSE;
-    }
+        return illegal("WATERMESH: BLOCK_SIZE=%g must be positive.", p->block);
     const double ratio = p->block / p->pixel;
     if (fabs(ratio - floor(ratio + 0.5)) > 1e-9 * ratio || ratio < 1)
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: BLOCK_SIZE=%g is not a multiple of "
-                 "PIXEL_SIZE=%g.",
-                 p->block, p->pixel);
-        return FALSE;
-    }
+        return illegal("WATERMESH: BLOCK_SIZE=%g is not a multiple of "
+                       "PIXEL_SIZE=%g.",
+                       p->block, p->pixel);
     if (ratio > (double)(WM_LOCAL_MAX / WM_Q))
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: BLOCK_SIZE=%g / PIXEL_SIZE=%g = %.0f samples "
-                 "per block side: a block would not fit in memory (at most "
-                 "%d).",
-                 p->block, p->pixel, ratio, WM_LOCAL_MAX / WM_Q);
-        return FALSE;
-    }
+        return illegal("WATERMESH: BLOCK_SIZE=%g / PIXEL_SIZE=%g = %.0f "
+                       "samples per block side: a block would not fit in "
+                       "memory (at most %d).",
+                       p->block, p->pixel, ratio, WM_LOCAL_MAX / WM_Q);
     if (ratio < 2)
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: BLOCK_SIZE=%g must be at least twice "
-                 "PIXEL_SIZE=%g.",
-                 p->block, p->pixel);
-        return FALSE;
-    }
+        return illegal("WATERMESH: BLOCK_SIZE=%g must be at least twice "
+                       "PIXEL_SIZE=%g.",
+                       p->block, p->pixel);
     p->n = (int32_t)floor(ratio + 0.5);
-    if (!number(opts, "SIMPLIFY", p->pixel, &p->simplify))
-        return FALSE;
-    if (p->simplify < 0)
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: SIMPLIFY=%g must be >= 0.", p->simplify);
-        return FALSE;
-    }
-    const char *m = CSLFetchNameValueDef(opts, "METHOD", "CONTOUR");
-    if (EQUAL(m, "CONTOUR"))
-        p->method = WM_METHOD_CONTOUR;
-    else if (EQUAL(m, "PAPER"))
-        p->method = WM_METHOD_PAPER;
-    else
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: METHOD=%s: expected CONTOUR or PAPER.", m);
-        return FALSE;
-    }
+    return number(opts, "SIMPLIFY", p->pixel, &p->simplify) &&
+           at_least_0("SIMPLIFY", p->simplify);
+}
+
+/* The index in names (NULL-terminated) of the value of option `name`
+ * (default def), any case; -1 after a CPLError listing them. */
+static int choice(CSLConstList opts, const char *name, const char *def,
+                  const char *const *names)
+{
+    const char *v = CSLFetchNameValueDef(opts, name, def);
+    int n = 0;
+    for (; names[n]; n++)
+        if (EQUAL(v, names[n]))
+            return n;
+    char list[256] = "";
+    for (int i = 0; i < n; i++)
+        CPLStrlcat(list,
+                   CPLSPrintf("%s%s",
+                              i == 0       ? ""
+                              : i == n - 1 ? " or "
+                                           : ", ",
+                              names[i]),
+                   sizeof list);
+    illegal("WATERMESH: %s=%s: expected %s.", name, v, list);
+    return -1;
+}
+
+/* METHOD, HEURISTIC, MESH_GEOMETRY and DEVICE, each in its enum's order. */
+static int parse_choices(CSLConstList opts, WMParams *p)
+{
+    static const char *const methods[] = {"CONTOUR", "PAPER", NULL};
     static const char *const heuristics[] = {
         "CLOSEST", "DIRECTIONAL_CW", "DIRECTIONAL_CCW", "LEAST_ANGLE", NULL};
-    const char *h = CSLFetchNameValueDef(opts, "HEURISTIC", "CLOSEST");
-    p->heuristic = -1;
-    for (int i = 0; heuristics[i]; i++)
-        if (EQUAL(h, heuristics[i]))
-            p->heuristic = i; /* the order of wm_heuristic */
-    if (p->heuristic < 0)
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: HEURISTIC=%s: expected CLOSEST, DIRECTIONAL_CW, "
-                 "DIRECTIONAL_CCW or LEAST_ANGLE.",
-                 h);
-        return FALSE;
-    }
-    if (!number(opts, "MERGE_DISTANCE", 0.0, &p->merge))
-        return FALSE;
-    if (!(p->merge >= 0))
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: MERGE_DISTANCE=%g must be >= 0.", p->merge);
-        return FALSE;
-    }
-    if (!number(opts, "MIN_FEATURE_AREA", 0.0, &p->min_feature_area))
-        return FALSE;
-    if (!(p->min_feature_area >= 0))
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: MIN_FEATURE_AREA=%g must be >= 0.",
-                 p->min_feature_area);
-        return FALSE;
-    }
-    if (!number(opts, "MIN_ANGLE", 0.0, &p->min_angle) ||
+    static const char *const forms[] = {"MULTIPOLYGON", "TIN", "TRIANGLES",
+                                        NULL};
+    static const char *const devices[] = {"AUTO", "CPU", "OPENCL", NULL};
+    const int m = choice(opts, "METHOD", "CONTOUR", methods);
+    const int h = m < 0 ? -1 : choice(opts, "HEURISTIC", "CLOSEST", heuristics);
+    const int g =
+        h < 0 ? -1 : choice(opts, "MESH_GEOMETRY", "MULTIPOLYGON", forms);
+    const int d = g < 0 ? -1 : choice(opts, "DEVICE", "AUTO", devices);
+    p->method = (wm_method)m;
+    p->heuristic = h;
+    p->mesh_form = (WMMeshForm)g;
+    p->device = (WMDeviceKind)d;
+    return d >= 0;
+}
+
+/* MERGE_DISTANCE, MIN_FEATURE_AREA, MIN_ANGLE and MAX_EDGE. */
+static int parse_mesh_options(CSLConstList opts, WMParams *p)
+{
+    if (!number(opts, "MERGE_DISTANCE", 0.0, &p->merge) ||
+        !at_least_0("MERGE_DISTANCE", p->merge) ||
+        !number(opts, "MIN_FEATURE_AREA", 0.0, &p->min_feature_area) ||
+        !at_least_0("MIN_FEATURE_AREA", p->min_feature_area) ||
+        !number(opts, "MIN_ANGLE", 0.0, &p->min_angle) ||
         !number(opts, "MAX_EDGE", 0.0, &p->max_edge))
         return FALSE;
     if (!(p->min_angle >= 0 && p->min_angle <= 30))
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: MIN_ANGLE=%g: expected 0 (off) to 30 degrees "
-                 "(20.7 is guaranteed; above it refinement may not end).",
-                 p->min_angle);
-        return FALSE;
-    }
+        return illegal("WATERMESH: MIN_ANGLE=%g: expected 0 (off) to 30 "
+                       "degrees (20.7 is guaranteed; above it refinement may "
+                       "not end).",
+                       p->min_angle);
     if (!(p->max_edge == 0 || p->max_edge >= p->pixel))
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: MAX_EDGE=%g: expected 0 (off) or at least "
-                 "PIXEL_SIZE (%g).",
-                 p->max_edge, p->pixel);
-        return FALSE;
-    }
-    const char *g = CSLFetchNameValueDef(opts, "MESH_GEOMETRY", "MULTIPOLYGON");
-    if (EQUAL(g, "MULTIPOLYGON"))
-        p->mesh_form = WM_MESH_MULTIPOLYGON;
-    else if (EQUAL(g, "TIN"))
-        p->mesh_form = WM_MESH_TIN;
-    else if (EQUAL(g, "TRIANGLES"))
-        p->mesh_form = WM_MESH_TRIANGLES;
-    else
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: MESH_GEOMETRY=%s: expected MULTIPOLYGON, TIN or "
-                 "TRIANGLES.",
-                 g);
-        return FALSE;
-    }
-    const char *d = CSLFetchNameValueDef(opts, "DEVICE", "AUTO");
-    if (EQUAL(d, "AUTO"))
-        p->device = WM_DEVICE_AUTO;
-    else if (EQUAL(d, "CPU"))
-        p->device = WM_DEVICE_CPU;
-    else if (EQUAL(d, "OPENCL"))
-        p->device = WM_DEVICE_OPENCL;
-    else
-    {
-        CPLError(CE_Failure, CPLE_IllegalArg,
-                 "WATERMESH: DEVICE=%s: expected AUTO, CPU or OPENCL.", d);
-        return FALSE;
-    }
+        return illegal("WATERMESH: MAX_EDGE=%g: expected 0 (off) or at least "
+                       "PIXEL_SIZE (%g).",
+                       p->max_edge, p->pixel);
+    return TRUE;
+}
+
+/* NUM_THREADS: 1 to 1024, or ALL_CPUS (the default). */
+static int parse_threads(CSLConstList opts, WMParams *p)
+{
     const char *t = CSLFetchNameValueDef(opts, "NUM_THREADS", "ALL_CPUS");
-    if (EQUAL(t, "ALL_CPUS"))
-        p->num_threads = CPLGetNumCPUs();
-    else
+    long v = CPLGetNumCPUs();
+    if (!EQUAL(t, "ALL_CPUS"))
     {
         char *end = NULL;
-        long v = strtol(t, &end, 10);
+        v = strtol(t, &end, 10);
         if (end == t || *end || v < 1 || v > 1024)
-        {
-            CPLError(CE_Failure, CPLE_IllegalArg,
-                     "WATERMESH: NUM_THREADS=%s: expected an integer from 1 "
-                     "to 1024, or ALL_CPUS.",
-                     t);
-            return FALSE;
-        }
-        p->num_threads = (int)v;
+            return illegal("WATERMESH: NUM_THREADS=%s: expected an integer "
+                           "from 1 to 1024, or ALL_CPUS.",
+                           t);
     }
-    if (p->num_threads < 1)
-        p->num_threads = 1;
-    const char *wf = CSLFetchNameValue(opts, "WIDTH_FIELD");
-    if (wf && *wf)
-        p->width_field = CPLStrdup(wf);
+    p->num_threads = v < 1 ? 1 : (int)v;
+    return TRUE;
+}
+
+/* SPAT=xmin,ymin,xmax,ymax (commas or spaces). */
+static int parse_spat(const char *spat, WMParams *p)
+{
+    char **tok = CSLTokenizeString2(spat, ", ", 0);
+    int ok = CSLCount(tok) == 4;
+    for (int i = 0; ok && i < 4; i++)
+    {
+        char *end = NULL;
+        p->spat[i] = CPLStrtod(tok[i], &end);
+        ok = end != tok[i] && !*end && isfinite(p->spat[i]);
+    }
+    CSLDestroy(tok);
+    if (!ok || p->spat[0] > p->spat[2] || p->spat[1] > p->spat[3])
+        return illegal("WATERMESH: SPAT=%s: expected xmin,ymin,xmax,ymax.",
+                       spat);
+    p->have_spat = TRUE;
+    return TRUE;
+}
+
+/* SHARD=i/N. */
+static int parse_shard(const char *shard, WMParams *p)
+{
+    long long i = -1, n = 0;
+    char tail = 0;
+    if (sscanf(shard, "%lld/%lld%c", &i, &n, &tail) != 2 || n < 1 ||
+        n > INT32_MAX || i < 0 || i >= n)
+        return illegal("WATERMESH: SHARD=%s: expected i/N with 0 <= i < N <= "
+                       "2^31 - 1.",
+                       shard);
+    p->shard = i;
+    p->nshards = n;
+    return TRUE;
+}
+
+/* A string option's copy (NULL when unset or empty). */
+static char *string_option(CSLConstList opts, const char *name)
+{
+    const char *v = CSLFetchNameValue(opts, name);
+    return v && *v ? CPLStrdup(v) : NULL;
+}
+
+static int params_parse(CSLConstList opts, WMParams *p)
+{
+    if (!parse_grid(opts, p) || !parse_choices(opts, p) ||
+        !parse_mesh_options(opts, p) || !parse_threads(opts, p))
+        return FALSE;
+    p->width_field = string_option(opts, "WIDTH_FIELD");
     const char *wc = CSLFetchNameValue(opts, "WIDTH_BY_CLASS");
     if (wc && *wc && !parse_classes(wc, p))
         return FALSE;
-    const char *ts = CSLFetchNameValue(opts, "TARGET_SRS");
-    if (ts && *ts)
-        p->target_srs = CPLStrdup(ts);
+    p->target_srs = string_option(opts, "TARGET_SRS");
     const char *spat = CSLFetchNameValue(opts, "SPAT");
-    if (spat && *spat)
-    {
-        char **tok = CSLTokenizeString2(spat, ", ", 0);
-        int ok = CSLCount(tok) == 4;
-        for (int i = 0; ok && i < 4; i++)
-        {
-            char *end = NULL;
-            p->spat[i] = CPLStrtod(tok[i], &end);
-            ok = end != tok[i] && !*end && isfinite(p->spat[i]);
-        }
-        CSLDestroy(tok);
-        if (!ok || p->spat[0] > p->spat[2] || p->spat[1] > p->spat[3])
-        {
-            CPLError(CE_Failure, CPLE_IllegalArg,
-                     "WATERMESH: SPAT=%s: expected xmin,ymin,xmax,ymax.", spat);
-            return FALSE;
-        }
-        p->have_spat = TRUE;
-    }
     const char *shard = CSLFetchNameValue(opts, "SHARD");
-    if (shard)
-    {
-        long long i = -1, n = 0;
-        char tail = 0;
-        if (sscanf(shard, "%lld/%lld%c", &i, &n, &tail) != 2 || n < 1 ||
-            n > INT32_MAX || i < 0 || i >= n)
-        {
-            CPLError(CE_Failure, CPLE_IllegalArg,
-                     "WATERMESH: SHARD=%s: expected i/N with 0 <= i < N <= "
-                     "2^31 - 1.",
-                     shard);
-            return FALSE;
-        }
-        p->shard = i;
-        p->nshards = n;
-    }
     const char *blk = CSLFetchNameValue(opts, "BLOCKS");
-    if (blk && !parse_blocks(blk, p))
+    if ((spat && *spat && !parse_spat(spat, p)) ||
+        (shard && !parse_shard(shard, p)) || (blk && !parse_blocks(blk, p)))
         return FALSE;
     if (p->nblockrects && !p->nshards) /* the whole grid, then the rects */
         p->nshards = 1;
-    const char *plan = CSLFetchNameValue(opts, "SHARD_PLAN");
-    if (plan && *plan)
-        p->shard_plan = CPLStrdup(plan);
+    p->shard_plan = string_option(opts, "SHARD_PLAN");
     if (!parse_elevation(opts, p))
         return FALSE;
     p->stats = CPLTestBool(CSLFetchNameValueDef(opts, "STATS", "NO"));
