@@ -922,17 +922,152 @@ static void store_tile(work *w, size_t t, float *val, float **dst)
 /* Tiles per slab of values (at least a batch): about 1 MB. */
 #define SLAB_TILES 256
 
+static wm_status field_nomem(const wm_ctx *ctx)
+{
+    return wm_fail(ctx, WM_ERR_NOMEM, "out of memory computing the field");
+}
+
+/* The items (river segments, lake polygons) of the scene's blocks that
+ * cover the window, clipped to the scene's grid, into wk->ids. */
+static wm_status gather_items(work *wk)
+{
+    const wm_scene *s = wk->s;
+    const wm_field *f = wk->f;
+    if (s->nbx <= 0)
+        return WM_OK;
+    const int64_t side = (int64_t)s->n * WM_Q;
+    int64_t bx0 = wm_floordiv(wk->X0, side), by0 = wm_floordiv(wk->Y0, side);
+    int64_t bx1 = wm_floordiv(wk->X0 + (int64_t)(f->w - 1) * WM_Q, side);
+    int64_t by1 = wm_floordiv(wk->Y0 + (int64_t)(f->h - 1) * WM_Q, side);
+    if (bx0 < s->bx0)
+        bx0 = s->bx0;
+    if (by0 < s->by0)
+        by0 = s->by0;
+    if (bx1 > s->bx0 + s->nbx - 1)
+        bx1 = s->bx0 + s->nbx - 1;
+    if (by1 > s->by0 + s->nby - 1)
+        by1 = s->by0 + s->nby - 1;
+    if (bx0 > bx1 || by0 > by1)
+        return WM_OK;
+    const wm_box blocks = {bx0, by0, bx1, by1};
+    if (wm_scene_items(s, blocks, &wk->ids, &wk->nsegs, &wk->npolys) != WM_OK)
+        return WM_ERR_NOMEM;
+    wk->segs = wk->ids;
+    wk->polys = wk->ids ? wk->ids + wk->nsegs : NULL;
+    return WM_OK;
+}
+
+/* The tiles whose samples need evaluating, in order, into cand; the
+ * others get their uniform kind. Returns how many. */
+static size_t candidates(work *wk, uint8_t *haspoly, size_t *cand)
+{
+    const wm_field *f = wk->f;
+    size_t ncand = 0;
+    for (int32_t ty = 0; ty < f->nty; ty++)
+        for (int32_t tx = 0; tx < f->ntx; tx++)
+        {
+            const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+            /* most tiles of a sparse block: nothing in reach and no lake's
+             * box, land as they are (kind 0) */
+            if (wk->tseg_start[t] == wk->tseg_start[t + 1] &&
+                wk->tedge_start[t] == wk->tedge_start[t + 1] &&
+                wk->tpoly_start[t] == wk->tpoly_start[t + 1])
+                continue;
+            if (!uniform_tile(wk, tx, ty, haspoly))
+                cand[ncand++] = t;
+        }
+    return ncand;
+}
+
+/* Evaluates the candidate tiles in batches (on dev, or the C path)
+ * straight into the field's slabs, keeping the mixed ones (store_tile packs
+ * them down over the uniform ones). */
+static wm_status eval_batches(work *wk, const wm_field_device *dev,
+                              const size_t *cand, size_t ncand,
+                              const wm_ctx *ctx)
+{
+    wm_field *f = wk->f;
+    /* the C path gains nothing from large batches: small ones stay in the
+     * cache */
+    const size_t batch = dev ? WM_FIELD_BATCH : 16;
+    const size_t nb = ncand < batch ? ncand : batch;
+    batch_buf bb;
+    memset(&bb, 0, sizeof bb);
+    bb.org = malloc((2 * nb + 1) * sizeof *bb.org);
+    bb.seg_start = malloc((nb + 1) * sizeof *bb.seg_start);
+    bb.grp_start = malloc((nb + 1) * sizeof *bb.grp_start);
+    wm_status st =
+        bb.org && bb.seg_start && bb.grp_start ? WM_OK : field_nomem(ctx);
+    float *top = NULL;
+    size_t room = 0, slabcap = 0; /* tiles left in the current slab */
+    size_t mixcap = 0;            /* room in f->mixed_tile and f->bits */
+    for (size_t c0 = 0; st == WM_OK && c0 < ncand; c0 += batch)
+    {
+        const size_t n = ncand - c0 < batch ? ncand - c0 : batch;
+        if (wm_cancelled(ctx))
+        {
+            st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+            break;
+        }
+        if (n > room)
+        {
+            const size_t cap = SLAB_TILES > batch ? SLAB_TILES : batch;
+            if (!wm_grow((void **)&f->slab, &slabcap, f->nslab + 1,
+                         sizeof *f->slab) ||
+                !(top = malloc(cap * TS1 * TS1 * sizeof *top)))
+            {
+                st = field_nomem(ctx);
+                break;
+            }
+            f->slab[f->nslab++] = top;
+            room = cap;
+        }
+        wm_field_batch b;
+        if (build_batch(wk, cand + c0, n, &bb, &b) != WM_OK ||
+            !index_room(f, n, &mixcap))
+        {
+            st = field_nomem(ctx);
+            break;
+        }
+        b.val = top;
+        b.samples = &f->samples;
+        b.pairs = &f->pairs;
+        st = dev ? dev->eval(dev->user, &b, ctx)
+                 : wm_field_eval_c(NULL, &b, ctx);
+        if (st != WM_OK)
+            break;
+        float *next = top;
+        for (size_t k = 0; k < n; k++)
+            store_tile(wk, cand[c0 + k], top + k * TS1 * TS1, &next);
+        room -= (size_t)(next - top) / (TS1 * TS1);
+        top = next;
+    }
+    batch_buf_free(&bb);
+    return st;
+}
+
+static void work_free(work *wk)
+{
+    free(wk->ids);
+    free(wk->tseg_start);
+    free(wk->tseg);
+    free(wk->tedge_start);
+    free(wk->tedge);
+    free(wk->tedge_poly);
+    free(wk->row0);
+    free(wk->nrows);
+    free(wk->key0);
+    free(wk->tpoly_start);
+    free(wk->tpoly);
+    free(wk->base);
+    free(wk->tog_start);
+    free(wk->tog);
+}
+
 wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
                            int32_t w, int32_t h, const wm_field_device *dev,
                            wm_field *f, const wm_ctx *ctx)
 {
-    wm_status st = WM_OK;
-    work wk;
-    batch_buf bb;
-    uint8_t *haspoly = NULL;
-    size_t *cand = NULL, ncand = 0;
-    memset(&wk, 0, sizeof wk);
-    memset(&bb, 0, sizeof bb);
     memset(f, 0, sizeof *f);
     if (w < 1 || h < 1)
         return wm_fail(ctx, WM_ERR_INVALID, "empty field window");
@@ -946,133 +1081,30 @@ wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,
     const size_t nt = (size_t)f->ntx * (size_t)f->nty;
     if (nt > UINT32_MAX) /* tiles are numbered in 32 bits */
         return wm_fail(ctx, WM_ERR_INVALID, "field window too large");
-    f->kind = calloc(nt, 1);
-    f->val = calloc(nt, sizeof *f->val);
-    if (!f->kind || !f->val)
-        goto nomem;
+    work wk;
+    memset(&wk, 0, sizeof wk);
     wk.s = s;
     wk.f = f;
     wk.X0 = gx0 * WM_Q;
     wk.Y0 = gy0 * WM_Q;
     wk.tsq = (int64_t)WM_TILE * WM_Q;
-
-    /* blocks covering the window, clipped to the scene's grid */
-    if (s->nbx > 0)
-    {
-        const int64_t side = (int64_t)s->n * WM_Q;
-        int64_t bx0 = wm_floordiv(wk.X0, side), by0 = wm_floordiv(wk.Y0, side);
-        int64_t bx1 = wm_floordiv(wk.X0 + (int64_t)(w - 1) * WM_Q, side);
-        int64_t by1 = wm_floordiv(wk.Y0 + (int64_t)(h - 1) * WM_Q, side);
-        if (bx0 < s->bx0)
-            bx0 = s->bx0;
-        if (by0 < s->by0)
-            by0 = s->by0;
-        if (bx1 > s->bx0 + s->nbx - 1)
-            bx1 = s->bx0 + s->nbx - 1;
-        if (by1 > s->by0 + s->nby - 1)
-            by1 = s->by0 + s->nby - 1;
-        if (bx0 <= bx1 && by0 <= by1)
-        {
-            const wm_box blocks = {bx0, by0, bx1, by1};
-            if (wm_scene_items(s, blocks, &wk.ids, &wk.nsegs, &wk.npolys) !=
-                WM_OK)
-                goto nomem;
-            wk.segs = wk.ids;
-            wk.polys = wk.ids ? wk.ids + wk.nsegs : NULL;
-        }
-    }
-    haspoly = calloc(wk.npolys + 1, 1);
-    cand = malloc(nt * sizeof *cand);
-    if (!haspoly || !cand || bin_items(&wk) != WM_OK ||
+    f->kind = calloc(nt, 1);
+    f->val = calloc(nt, sizeof *f->val);
+    uint8_t *haspoly = NULL;
+    size_t *cand = NULL;
+    wm_status st;
+    if (!f->kind || !f->val || gather_items(&wk) != WM_OK ||
+        !(haspoly = calloc(wk.npolys + 1, 1)) ||
+        !(cand = malloc(nt * sizeof *cand)) || bin_items(&wk) != WM_OK ||
         bin_polys(&wk) != WM_OK || build_crossings(&wk) != WM_OK)
-        goto nomem;
-    for (int32_t ty = 0; ty < f->nty; ty++)
-        for (int32_t tx = 0; tx < f->ntx; tx++)
-        {
-            const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
-            /* most tiles of a sparse block: nothing in reach and no lake's
-             * box, land as they are (kind 0) */
-            if (wk.tseg_start[t] == wk.tseg_start[t + 1] &&
-                wk.tedge_start[t] == wk.tedge_start[t + 1] &&
-                wk.tpoly_start[t] == wk.tpoly_start[t + 1])
-                continue;
-            if (!uniform_tile(&wk, tx, ty, haspoly))
-                cand[ncand++] = t;
-        }
-
-    /* the C path gains nothing from large batches: small ones stay in the
-     * cache */
-    const size_t batch = dev ? WM_FIELD_BATCH : 16;
-    const size_t nb = ncand < batch ? ncand : batch;
-    bb.org = malloc((2 * nb + 1) * sizeof *bb.org);
-    bb.seg_start = malloc((nb + 1) * sizeof *bb.seg_start);
-    bb.grp_start = malloc((nb + 1) * sizeof *bb.grp_start);
-    if (!bb.org || !bb.seg_start || !bb.grp_start)
-        goto nomem;
-    /* batches are evaluated straight into the slabs, mixed tiles then
-     * packed down over the uniform ones */
-    float *top = NULL;
-    size_t room = 0, slabcap = 0; /* tiles left in the current slab */
-    size_t mixcap = 0;            /* room in f->mixed_tile and f->bits */
-    for (size_t c0 = 0; c0 < ncand; c0 += batch)
-    {
-        const size_t n = ncand - c0 < batch ? ncand - c0 : batch;
-        wm_field_batch b;
-        if (wm_cancelled(ctx))
-        {
-            st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
-            goto failed;
-        }
-        if (n > room)
-        {
-            const size_t cap = SLAB_TILES > batch ? SLAB_TILES : batch;
-            if (!wm_grow((void **)&f->slab, &slabcap, f->nslab + 1,
-                         sizeof *f->slab) ||
-                !(top = malloc(cap * TS1 * TS1 * sizeof *top)))
-                goto nomem;
-            f->slab[f->nslab++] = top;
-            room = cap;
-        }
-        if (build_batch(&wk, cand + c0, n, &bb, &b) != WM_OK)
-            goto nomem;
-        b.val = top;
-        b.samples = &f->samples;
-        b.pairs = &f->pairs;
-        st = dev ? dev->eval(dev->user, &b, ctx)
-                 : wm_field_eval_c(NULL, &b, ctx);
-        if (st != WM_OK)
-            goto failed;
-        float *next = top;
-        if (!index_room(f, n, &mixcap))
-            goto nomem;
-        for (size_t k = 0; k < n; k++)
-            store_tile(&wk, cand[c0 + k], top + k * TS1 * TS1, &next);
-        room -= (size_t)(next - top) / (TS1 * TS1);
-        top = next;
-    }
-    goto cleanup;
-nomem:
-    st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory computing the field");
-failed:
-    wm_field_free(f);
-cleanup:
-    batch_buf_free(&bb);
+        st = field_nomem(ctx);
+    else
+        st = eval_batches(&wk, dev, cand, candidates(&wk, haspoly, cand), ctx);
+    if (st != WM_OK)
+        wm_field_free(f);
     free(cand);
     free(haspoly);
-    free(wk.ids);
-    free(wk.tseg_start);
-    free(wk.tseg);
-    free(wk.tedge_start);
-    free(wk.tedge);
-    free(wk.tedge_poly);
-    free(wk.row0);
-    free(wk.nrows);
-    free(wk.key0);
-    free(wk.tpoly_start);
-    free(wk.tpoly);
-    free(wk.base);
-    free(wk.tog_start);
-    free(wk.tog);
+    work_free(&wk);
     return st;
 }
 
