@@ -559,119 +559,106 @@ static int first_insertable(wm_probe *in, ringgrid *g, const nearest *nr,
     return 0;
 }
 
-/* One pass: tries the open corners against the current rings (with hot,
- * the sorted keys of the hot cells next to the corners the previous pass
- * inserted, only those in them), updates their states and rebuilds the
- * rings with the accepted corners; *ninserted says how many. *newhot
- * receives this pass's hot cells (*nnewhot keys, caller frees). */
-static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
-                             size_t ncs, const uint64_t *hot, size_t nhot,
-                             uint64_t **newhot, size_t *nnewhot,
-                             size_t *ninserted)
+/* The insertions of a pass, and the ring points they split. */
+typedef struct
 {
-    wm_status st = WM_OK;
-    const int32_t S = in->s->n * WM_Q;
-    insertion *ins = NULL;
-    size_t nins = 0, inscap = 0, ntodo = 0;
-    uint8_t *split = NULL, *active = NULL;
-    edge_key *cut = NULL;
-    ringgrid g;
-    memset(&g, 0, sizeof g);
-    *ninserted = 0;
-    size_t *todo = malloc((ncs + 1) * sizeof *todo);
-    if (!todo)
-        goto nomem;
-    for (size_t i = 0; i < ncs; i++)
-        if (cs[i].state == C_OPEN && (!hot || near_hot(hot, nhot, cs[i].c)))
-            todo[ntodo++] = i;
-    if (ntodo == 0)
-        goto cleanup;
-    active = pass_cells(cs, todo, ntodo, S);
-    if (!active)
-        goto nomem;
-    st = build_ringgrid(&g, rings, S, active);
-    active = NULL; /* the grid's */
-    if (st != WM_OK)
-        goto nomem;
-    split = calloc(rings->npts + 1, 1);
-    if (!split)
-        goto nomem;
-    for (size_t q = 0; q < ntodo; q++)
-    {
-        corner *cd = &cs[todo[q]];
-        const wm_pt c = cd->c;
-        /* nearest edges: a small search first (most corners are already
-         * within a quarter pixel of one) */
-        nearest nr = {&g, c.x, c.y, {0}, {0}, 0, S};
-        int32_t R = WM_Q;
-        if (visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
-                        &nr) < 0)
-            goto nomem;
-        if (nr.n > 0 && nr.best[0] <= WM_Q / 4.0)
-        {
-            cd->state = C_CLOSE;
-            cd->e0 = rings->pts[nr.edge[0]];
-            cd->e1 = rings->pts[succ(rings, g.ring_of, nr.edge[0])];
-            continue;
-        }
-        /* a corner of the union, not one buried under another input */
-        if (fabs(wm_probe_distance(in, c.x, c.y, 4.0 * WM_Q)) > 1.0)
-        {
-            cd->state = C_DONE;
-            continue;
-        }
-        /* the nearest edges within a pixel, then (none taking the corner)
-         * within WM_CREASE_REACH */
-        size_t ka = SIZE_MAX;
-        for (int pass = nr.n ? 0 : 1; pass < 2 && ka == SIZE_MAX; pass++)
-        {
-            if (pass == 1)
-            {
-                R = WM_CREASE_REACH;
-                nr.n = 0;
-                if (visit_edges(&g, c.x - R, c.y - R, c.x + R, c.y + R,
-                                nearest_fn, &nr) < 0)
-                    goto nomem;
-            }
-            while (nr.n > 0 && nr.best[nr.n - 1] > R)
-                nr.n--;
-            if (first_insertable(in, &g, &nr, c, split, ins, nins, &ka) < 0)
-                goto nomem;
-        }
-        if (ka == SIZE_MAX)
-            continue;
-        const size_t kb = succ(rings, g.ring_of, ka);
-        const insertion x = {c, ka};
-        if (!wm_push((void **)&ins, &nins, &inscap, &x, sizeof x))
-            goto nomem;
-        cd->state = C_DONE;
-        split[ka] = 1;
-        split[pred(rings, g.ring_of, ka)] = 1; /* neighbours stay as they */
-        split[kb] = 1;                         /* are: one corner per run */
-    }
+    insertion *ins;
+    size_t n, cap;
+    uint8_t *split; /* per ring point: its edge (or a neighbour's) taken */
+} pass_ins;
 
-    if (nins == 0)
-        goto cleanup;
-    *newhot = malloc(9 * nins * sizeof **newhot);
-    if (!*newhot)
-        goto nomem;
+/* Tries open corner cd against the rings in grid g: within a quarter pixel
+ * of an edge it is close (that edge its witness); buried under another
+ * input it is done; else it is inserted into the first nearest edge (within
+ * a pixel, else WM_CREASE_REACH) that may take it, if any. -1 when out of
+ * memory, else 0. */
+static int place_corner(wm_probe *in, ringgrid *g, corner *cd, pass_ins *pi)
+{
+    const wm_rings *rings = g->r;
+    const int32_t S = in->s->n * WM_Q;
+    const wm_pt c = cd->c;
+    /* nearest edges: a small search first (most corners are already within
+     * a quarter pixel of one) */
+    nearest nr = {g, c.x, c.y, {0}, {0}, 0, S};
+    int32_t R = WM_Q;
+    if (visit_edges(g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn, &nr) < 0)
+        return -1;
+    if (nr.n > 0 && nr.best[0] <= WM_Q / 4.0)
+    {
+        cd->state = C_CLOSE;
+        cd->e0 = rings->pts[nr.edge[0]];
+        cd->e1 = rings->pts[succ(rings, g->ring_of, nr.edge[0])];
+        return 0;
+    }
+    /* a corner of the union, not one buried under another input */
+    if (fabs(wm_probe_distance(in, c.x, c.y, 4.0 * WM_Q)) > 1.0)
+    {
+        cd->state = C_DONE;
+        return 0;
+    }
+    /* the nearest edges within a pixel, then (none taking the corner)
+     * within WM_CREASE_REACH */
+    size_t ka = SIZE_MAX;
+    for (int pass = nr.n ? 0 : 1; pass < 2 && ka == SIZE_MAX; pass++)
+    {
+        if (pass == 1)
+        {
+            R = WM_CREASE_REACH;
+            nr.n = 0;
+            if (visit_edges(g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
+                            &nr) < 0)
+                return -1;
+        }
+        while (nr.n > 0 && nr.best[nr.n - 1] > R)
+            nr.n--;
+        if (first_insertable(in, g, &nr, c, pi->split, pi->ins, pi->n, &ka) < 0)
+            return -1;
+    }
+    if (ka == SIZE_MAX)
+        return 0;
+    const insertion x = {c, ka};
+    if (!wm_push((void **)&pi->ins, &pi->n, &pi->cap, &x, sizeof x))
+        return -1;
+    cd->state = C_DONE;
+    pi->split[ka] = 1;
+    pi->split[pred(rings, g->ring_of, ka)] = 1; /* neighbours stay as they */
+    pi->split[succ(rings, g->ring_of, ka)] = 1; /* are: one corner per run */
+    return 0;
+}
+
+/* The sorted, distinct keys of the 3 x 3 cells around each insertion, into
+ * *hot (*nhot; caller frees); 0 when out of memory. */
+static int hot_cells(const insertion *ins, size_t nins, uint64_t **hot,
+                     size_t *nhot)
+{
+    *hot = malloc(9 * nins * sizeof **hot);
+    if (!*hot)
+        return 0;
     size_t nh = 0;
     for (size_t i = 0; i < nins; i++)
         for (int dy = -1; dy <= 1; dy++)
             for (int dx = -1; dx <= 1; dx++)
-                (*newhot)[nh++] = hot_key(ins[i].p, dx, dy);
-    qsort(*newhot, nh, sizeof **newhot, cmp_u64);
-    *nnewhot = 0;
+                (*hot)[nh++] = hot_key(ins[i].p, dx, dy);
+    qsort(*hot, nh, sizeof **hot, cmp_u64);
+    *nhot = 0;
     for (size_t i = 0; i < nh; i++)
-        if (i == 0 || (*newhot)[i] != (*newhot)[i - 1])
-            (*newhot)[(*nnewhot)++] = (*newhot)[i];
-    /* the corners whose witness edge is split are open again */
-    cut = malloc(nins * sizeof *cut);
+        if (i == 0 || (*hot)[i] != (*hot)[i - 1])
+            (*hot)[(*nhot)++] = (*hot)[i];
+    return 1;
+}
+
+/* The close corners whose witness edge an insertion splits are open
+ * again; 0 when out of memory. */
+static int reopen_cut(const ringgrid *g, const insertion *ins, size_t nins,
+                      corner *cs, size_t ncs)
+{
+    const wm_rings *rings = g->r;
+    edge_key *cut = malloc(nins * sizeof *cut);
     if (!cut)
-        goto nomem;
+        return 0;
     for (size_t i = 0; i < nins; i++)
         cut[i] = make_key(rings->pts[ins[i].seg],
-                          rings->pts[succ(rings, g.ring_of, ins[i].seg)]);
+                          rings->pts[succ(rings, g->ring_of, ins[i].seg)]);
     qsort(cut, nins, sizeof *cut, cmp_key);
     for (size_t i = 0; i < ncs; i++)
     {
@@ -681,12 +668,18 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
         if (bsearch(&k, cut, nins, sizeof *cut, cmp_key))
             cs[i].state = C_OPEN;
     }
-    /* insert the corners in place: new ring starts, then the points moved
-     * up from the back */
+    free(cut);
+    return 1;
+}
+
+/* Inserts the points in place (ins sorted here): new ring starts, then the
+ * points moved up from the back; 0 when out of memory. */
+static int insert_points(wm_rings *rings, insertion *ins, size_t nins)
+{
     qsort(ins, nins, sizeof *ins, cmp_ins);
     if (!wm_grow((void **)&rings->pts, &rings->pts_cap, rings->npts + nins,
                  sizeof *rings->pts))
-        goto nomem;
+        return 0;
     for (size_t ri = 1, j = 0; ri <= rings->nrings; ri++)
     {
         while (j < nins && ins[j].seg < rings->start[ri])
@@ -702,18 +695,55 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
         rings->pts[--dst] = ins[j].p;
     }
     rings->npts += nins;
-    *ninserted = nins;
-    goto cleanup;
-nomem:
-    st = WM_ERR_NOMEM;
-cleanup:
-    free(ins);
-    free(split);
+    return 1;
+}
+
+/* One pass: tries the open corners against the current rings (with hot,
+ * the sorted keys of the hot cells next to the corners the previous pass
+ * inserted, only those in them), updates their states and rebuilds the
+ * rings with the accepted corners; *ninserted says how many. *newhot
+ * receives this pass's hot cells (*nnewhot keys, caller frees). */
+static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
+                             size_t ncs, const uint64_t *hot, size_t nhot,
+                             uint64_t **newhot, size_t *nnewhot,
+                             size_t *ninserted)
+{
+    const int32_t S = in->s->n * WM_Q;
+    *ninserted = 0;
+    size_t ntodo = 0;
+    size_t *todo = malloc((ncs + 1) * sizeof *todo);
+    if (!todo)
+        return WM_ERR_NOMEM;
+    for (size_t i = 0; i < ncs; i++)
+        if (cs[i].state == C_OPEN && (!hot || near_hot(hot, nhot, cs[i].c)))
+            todo[ntodo++] = i;
+    if (ntodo == 0)
+    {
+        free(todo);
+        return WM_OK;
+    }
+    pass_ins pi = {NULL, 0, 0, NULL};
+    ringgrid g;
+    memset(&g, 0, sizeof g);
+    uint8_t *active = pass_cells(cs, todo, ntodo, S);
+    /* the grid owns active */
+    int ok = active && build_ringgrid(&g, rings, S, active) == WM_OK &&
+             (pi.split = calloc(rings->npts + 1, 1)) != NULL;
+    for (size_t q = 0; ok && q < ntodo; q++)
+        ok = place_corner(in, &g, &cs[todo[q]], &pi) == 0;
+    if (ok && pi.n > 0)
+    {
+        ok = hot_cells(pi.ins, pi.n, newhot, nnewhot) &&
+             reopen_cut(&g, pi.ins, pi.n, cs, ncs) &&
+             insert_points(rings, pi.ins, pi.n);
+        if (ok)
+            *ninserted = pi.n;
+    }
+    free(pi.ins);
+    free(pi.split);
     free(todo);
-    free(active);
-    free(cut);
     free_ringgrid(&g);
-    return st;
+    return ok ? WM_OK : WM_ERR_NOMEM;
 }
 
 wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
