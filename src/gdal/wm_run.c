@@ -349,8 +349,6 @@ static void world(const WMScene *s, const wm_block_result *r, wm_pt p,
     *y = (double)(r->by * side + p.y) * s->unit;
 }
 
-/* Point k of the block's rings into point i of g, with its height when
- * the result has heights. */
 /* ---- geometries: written as WKB, then imported by OGR in one call ----- */
 
 /* A WKB writer into a buffer sized beforehand; native byte order. */
@@ -384,6 +382,8 @@ static void put_head(wkb_out *o, uint32_t iso_type, size_t count)
     put_u32(o, count);
 }
 
+/* Point k of the block (world coordinates, and its height when the
+ * result has heights). */
 static void put_point(wkb_out *o, size_t k)
 {
     double c[3];
