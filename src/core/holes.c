@@ -103,38 +103,15 @@ static void h_offer(h_query *q, wm_pt lo, wm_pt hi, uint32_t S, int upward)
     q->upward = upward;
 }
 
-wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
-                           const wm_ctx *ctx)
+/* Step 1: per ring, its query (lowest-leftmost vertex) into qs (*nq; an
+ * empty ring has none) and its orientation; hit and enclosing start at
+ * -1. */
+static void make_queries(const wm_rings *rings, h_query *qs, size_t *nq,
+                         int32_t *hit, int32_t *enclosing, unsigned char *ccw)
 {
-    wm_status st = WM_OK;
-    const size_t nr = rings->nrings;
     const wm_pt *P = rings->pts;
-    h_query *qs = NULL;
-    uint64_t *rows = NULL;
-    uint32_t *stack = NULL;
-    int32_t *hit = NULL;
-    unsigned char *inside = NULL, *ccw = NULL, *state = NULL;
-    size_t nq = 0;
-
-    if (nr == 0)
-        return WM_OK;
-    if (nr > (size_t)INT32_MAX || rings->npts >= (size_t)UINT32_MAX)
-        return wm_fail(ctx, WM_ERR_NOMEM, "holes: too many rings or points");
-
-    qs = malloc(nr * sizeof *qs);
-    hit = malloc(nr * sizeof *hit);
-    inside = calloc(nr, 1);
-    ccw = calloc(nr, 1);
-    state = calloc(nr, 1);
-    stack = malloc(nr * sizeof *stack);
-    if (!qs || !hit || !inside || !ccw || !state || !stack)
-    {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "holes: out of memory");
-        goto cleanup;
-    }
-
-    /* per ring: lowest-leftmost vertex, orientation */
-    for (size_t r = 0; r < nr; r++)
+    *nq = 0;
+    for (size_t r = 0; r < rings->nrings; r++)
     {
         const size_t b = rings->start[r], e = rings->start[r + 1];
         hit[r] = -1;
@@ -146,24 +123,18 @@ wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
             if (P[i].y < P[m].y || (P[i].y == P[m].y && P[i].x < P[m].x))
                 m = i;
         const h_query q = {P[m].x, P[m].y, (uint32_t)r, 0, 0, 0, 0, 0, 0};
-        qs[nq++] = q;
+        qs[(*nq)++] = q;
         ccw[r] = wm_ring_area2(P + b, e - b) > 0;
     }
-    if (nq == 0)
-        goto cleanup;
-    qsort(qs, nq, sizeof *qs, cmp_query);
-    const int64_t y0 = qs[0].y, y1 = qs[nq - 1].y;
-    rows = calloc((size_t)((y1 - y0) >> 6) + 1, sizeof *rows);
-    if (!rows)
-    {
-        st = wm_fail(ctx, WM_ERR_NOMEM, "holes: out of memory (rows)");
-        goto cleanup;
-    }
-    for (size_t k = 0; k < nq; k++)
-        rows[(qs[k].y - y0) >> 6] |= UINT64_C(1) << ((qs[k].y - y0) & 63);
+}
 
-    /* every edge offers itself to the queries whose ray it crosses */
-    for (size_t r = 0; r < nr; r++)
+/* Step 2: every edge offers itself to the queries (sorted by y, their rows
+ * set in the bitmap rows from y0 to y1) whose ray it crosses. */
+static void offer_edges(const wm_rings *rings, h_query *qs, size_t nq,
+                        const uint64_t *rows, int64_t y0, int64_t y1)
+{
+    const wm_pt *P = rings->pts;
+    for (size_t r = 0; r < rings->nrings; r++)
     {
         const size_t b = rings->start[r], e = rings->start[r + 1];
         for (size_t i = b; i < e; i++)
@@ -191,18 +162,13 @@ wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
                     h_offer(&qs[k], lo, hi, (uint32_t)r, upward);
         }
     }
-    for (size_t k = 0; k < nq; k++)
-        if (qs[k].found)
-        {
-            /* q is on the +x side of the edge: its right side if the edge
-             * goes up, its left side if it goes down; the interior of S is
-             * on the left for a CCW ring, on the right for a CW ring. */
-            hit[qs[k].r] = (int32_t)qs[k].S;
-            inside[qs[k].r] = (unsigned char)(qs[k].upward == !ccw[qs[k].S]);
-        }
+}
 
-    /* resolve: enc(r) = -1 | hit | enc(hit), iteratively with a memo.
-     * state: 0 unknown, 1 on the stack, 2 done. */
+/* Step 3: enc(r) = -1 | hit | enc(hit), iteratively with a memo. state: 0
+ * unknown, 1 on the stack, 2 done. */
+static void resolve(size_t nr, const int32_t *hit, const unsigned char *inside,
+                    unsigned char *state, uint32_t *stack, int32_t *enclosing)
+{
     for (size_t r0 = 0; r0 < nr; r0++)
     {
         size_t sp = 0;
@@ -229,7 +195,53 @@ wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
             state[x] = 2;
         }
     }
+}
 
+wm_status wm_holes_nesting(const wm_rings *rings, int32_t *enclosing,
+                           const wm_ctx *ctx)
+{
+    const size_t nr = rings->nrings;
+    if (nr == 0)
+        return WM_OK;
+    if (nr > (size_t)INT32_MAX || rings->npts >= (size_t)UINT32_MAX)
+        return wm_fail(ctx, WM_ERR_NOMEM, "holes: too many rings or points");
+    wm_status st = WM_OK;
+    h_query *qs = malloc(nr * sizeof *qs);
+    int32_t *hit = malloc(nr * sizeof *hit);
+    unsigned char *inside = calloc(nr, 1), *ccw = calloc(nr, 1);
+    unsigned char *state = calloc(nr, 1);
+    uint32_t *stack = malloc(nr * sizeof *stack);
+    uint64_t *rows = NULL;
+    size_t nq = 0;
+    if (!qs || !hit || !inside || !ccw || !state || !stack)
+    {
+        st = wm_fail(ctx, WM_ERR_NOMEM, "holes: out of memory");
+        goto cleanup;
+    }
+    make_queries(rings, qs, &nq, hit, enclosing, ccw);
+    if (nq == 0)
+        goto cleanup;
+    qsort(qs, nq, sizeof *qs, cmp_query);
+    const int64_t y0 = qs[0].y, y1 = qs[nq - 1].y;
+    rows = calloc((size_t)((y1 - y0) >> 6) + 1, sizeof *rows);
+    if (!rows)
+    {
+        st = wm_fail(ctx, WM_ERR_NOMEM, "holes: out of memory (rows)");
+        goto cleanup;
+    }
+    for (size_t k = 0; k < nq; k++)
+        rows[(qs[k].y - y0) >> 6] |= UINT64_C(1) << ((qs[k].y - y0) & 63);
+    offer_edges(rings, qs, nq, rows, y0, y1);
+    for (size_t k = 0; k < nq; k++)
+        if (qs[k].found)
+        {
+            /* q is on the +x side of the edge: its right side if the edge
+             * goes up, its left side if it goes down; the interior of S is
+             * on the left for a CCW ring, on the right for a CW ring. */
+            hit[qs[k].r] = (int32_t)qs[k].S;
+            inside[qs[k].r] = (unsigned char)(qs[k].upward == !ccw[qs[k].S]);
+        }
+    resolve(nr, hit, inside, state, stack, enclosing);
 cleanup:
     free(qs);
     free(rows);
