@@ -56,7 +56,9 @@ OGRSpatialReferenceH CPL_DLL WMGetWorkingSRS(OGRLayerH hRivers,
  * @param pProgressArg its argument
  * @return CE_None, or CE_Failure after a CPLError (CPLE_UserInterrupt on
  *         cancellation). Geometries are in the working CRS
- *         (WMGetWorkingSRS).
+ *         (WMGetWorkingSRS). Features are built in worker threads from the
+ *         output layers' definitions, which must not change during the
+ *         call; they are written from the calling thread.
  */
 CPLErr CPL_DLL WMGenerate(OGRLayerH hRivers, OGRLayerH hLakes, OGRLayerH hWater,
                           OGRLayerH hMesh, CSLConstList papszOptions,

@@ -290,22 +290,27 @@ static int choice(CSLConstList opts, const char *name, const char *def,
     return -1;
 }
 
-/* METHOD, HEURISTIC, MESH_GEOMETRY and DEVICE, each in its enum's order. */
-static int parse_choices(CSLConstList opts, WMParams *p)
+/* METHOD and HEURISTIC, each in its enum's order. */
+static int parse_method(CSLConstList opts, WMParams *p)
 {
     static const char *const methods[] = {"CONTOUR", "PAPER", NULL};
     static const char *const heuristics[] = {
         "CLOSEST", "DIRECTIONAL_CW", "DIRECTIONAL_CCW", "LEAST_ANGLE", NULL};
+    const int m = choice(opts, "METHOD", "CONTOUR", methods);
+    p->heuristic =
+        m < 0 ? -1 : choice(opts, "HEURISTIC", "CLOSEST", heuristics);
+    p->method = (wm_method)m;
+    return p->heuristic >= 0;
+}
+
+/* MESH_GEOMETRY and DEVICE, each in its enum's order. */
+static int parse_output(CSLConstList opts, WMParams *p)
+{
     static const char *const forms[] = {"MULTIPOLYGON", "TIN", "TRIANGLES",
                                         NULL};
     static const char *const devices[] = {"AUTO", "CPU", "OPENCL", NULL};
-    const int m = choice(opts, "METHOD", "CONTOUR", methods);
-    const int h = m < 0 ? -1 : choice(opts, "HEURISTIC", "CLOSEST", heuristics);
-    const int g =
-        h < 0 ? -1 : choice(opts, "MESH_GEOMETRY", "MULTIPOLYGON", forms);
+    const int g = choice(opts, "MESH_GEOMETRY", "MULTIPOLYGON", forms);
     const int d = g < 0 ? -1 : choice(opts, "DEVICE", "AUTO", devices);
-    p->method = (wm_method)m;
-    p->heuristic = h;
     p->mesh_form = (WMMeshForm)g;
     p->device = (WMDeviceKind)d;
     return d >= 0;
@@ -394,8 +399,9 @@ static char *string_option(CSLConstList opts, const char *name)
 
 static int params_parse(CSLConstList opts, WMParams *p)
 {
-    if (!parse_grid(opts, p) || !parse_choices(opts, p) ||
-        !parse_mesh_options(opts, p) || !parse_threads(opts, p))
+    if (!parse_grid(opts, p) || !parse_method(opts, p) ||
+        !parse_mesh_options(opts, p) || !parse_output(opts, p) ||
+        !parse_threads(opts, p))
         return FALSE;
     p->width_field = string_option(opts, "WIDTH_FIELD");
     const char *wc = CSLFetchNameValue(opts, "WIDTH_BY_CLASS");

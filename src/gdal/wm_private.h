@@ -227,9 +227,9 @@ int WMBlockCount(const WMScene *s, const double *spat, uint64_t *count);
  *  res and prep; returns FALSE to stop the run (after a CPLError).
  *  prepare (optional): called from the worker thread that computed res,
  *  before put, to do put's work that needs no shared state (building
- *  features); what it returns is put's prep (NULL: nothing prepared, put
- *  does it all). drop: frees a prep that never reached put (a run that
- *  stopped early). */
+ *  features); what it returns is put's prep (NULL: nothing prepared, or
+ *  out of memory: put does it all). drop (required with prepare): frees a
+ *  prep that never reached put (a run that stopped early). */
 typedef struct
 {
     int (*put)(void *user, wm_block_result *res, void *prep);

@@ -525,6 +525,8 @@ OGRFeatureH WMNewFeature(const WMScene *s, OGRFeatureDefnH defn, int mesh,
                          const wm_block_result *r, size_t p, size_t t)
 {
     OGRFeatureH f = OGR_F_Create(defn);
+    if (!f)
+        return NULL;
     set_int(f, "block_x", r->bx);
     set_int(f, "block_y", r->by);
     set_int(f, "polygon", (GIntBig)p);
