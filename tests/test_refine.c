@@ -420,6 +420,61 @@ int main(void)
         wm_rings_free(&ra);
         wm_rings_free(&rb);
     }
+    /* a shore 30 units from the side x = S near y = 20000 only: the side
+     * edge from the block corner (S, 0) to (S, 40000) is graded finely
+     * there and coarsely elsewhere, with no piece more than four times as
+     * long as its neighbour (Ruppert cannot split a side piece, so a long
+     * one next to a short one leaves a skinny triangle on it), the piece at
+     * the corner no longer than 16 pixels (four times the 4 pixels beyond
+     * the corner that the side across it is graded against), and both
+     * blocks cut it alike */
+    {
+        const int S = 51200, H = 40000;
+        const int a[] = {S - 20000, 0, S, 0, S, H, S - 20000, H};
+        const int b[] = {0, 0, 20000, 0, 20000, H, 0, H};
+        wm_rings ra, rb;
+        memset(&ra, 0, sizeof ra);
+        memset(&rb, 0, sizeof rb);
+        ring(&ra, a, 4);
+        ring(&rb, b, 4);
+        const shores sh = {1, {{S - 30, 19000, S - 30, 21000}}};
+        const wm_refine_opts oa = {20, 0, S, 0, 0, room_of_shores, (void *)&sh};
+        const wm_refine_opts ob = {20, 0, S, S, 0, room_of_shores, (void *)&sh};
+        int32_t ya[512], yb[512];
+        wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
+        const int na = side_points(&ra, &oa, S, ya, 510, &sa);
+        const int nb = side_points(&rb, &ob, 0, yb, 510, &sb);
+        int differ = na != nb, ratio = 0;
+        for (int i = 0; !differ && i < na; i++)
+            differ = ya[i] != yb[i];
+        int32_t y[514], shortest = H;
+        int n = 0;
+        y[n++] = 0;
+        for (int i = 0; i < na && na < 510; i++)
+            y[n++] = ya[i];
+        y[n++] = H;
+        for (int i = 0; i + 1 < n; i++)
+        {
+            const int32_t len = y[i + 1] - y[i];
+            shortest = len < shortest ? len : shortest;
+            if (i + 2 < n && (len > 4 * (y[i + 2] - y[i + 1]) ||
+                              y[i + 2] - y[i + 1] > 4 * len))
+                ratio++;
+        }
+        TAP_OK(na > 0 && na < 510 && nb > 0,
+               "side graded near a shore: %d side points", na);
+        TAP_EQ(differ, 0, "side graded near a shore: both blocks alike");
+        TAP_OK(shortest <= 32,
+               "side graded near a shore: shortest piece %d units (room 30)",
+               (int)shortest);
+        TAP_EQ(ratio, 0,
+               "side graded near a shore: neighbouring pieces within 4x");
+        TAP_OK(na > 0 && ya[0] <= 16 * 256,
+               "side graded near a shore: the corner's piece %d <= 16 pixels",
+               na > 0 ? (int)ya[0] : -1);
+        wm_rings_free(&ra);
+        wm_rings_free(&rb);
+    }
     /* invalid input is the CDT's error */
     {
         wm_rings r;

@@ -53,11 +53,13 @@ extern "C"
      * max_edge, at the global lattice multiples of max_edge along the side;
      * with min_angle and o->room, each piece is halved (at its global
      * midpoint, rounded down) while it is longer than its room at that
-     * midpoint and than 8 pixels at an end of the side edge, 1 pixel
+     * midpoint and than 8 pixels at an end of the side edge, 1/16 pixel
      * elsewhere: no point of the inputs' shore then lies within half the
      * room of its diametral circle, so refinement next to the side seldom
      * needs to split it (the extracted shore lies within about a pixel
-     * and SIMPLIFY of the inputs'). Rounds of batch
+     * and SIMPLIFY of the inputs'); then, while a piece is more than four
+     * times as long as a neighbour (or, at a block corner, than 4
+     * pixels), it is halved too. Rounds of batch
      * insertion (into the triangulation kept from the round before:
      * wm_cdt_insert, wm_cdt_split) repeat until nothing is bad or a round
      * changes nothing; bounds
