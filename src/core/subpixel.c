@@ -41,10 +41,12 @@
  * seeds reach it: a point of each input smaller than two pixels, the tip
  * of each river cap narrower than 1.5 pixels, the corners of the union
  * (two input boundaries crossing, corners.c) off their cell's segment, and
- * those of a cell holding two or more (crowded_cells). What stays unseen:
+ * those of a cell holding two or more (crowded_cells); a point on a cell's
+ * side is in both cells (cells_holding), since the boundary may turn at it
+ * in either. What stays unseen:
  * three crossings on an edge whose samples differ that is not loose, and a
  * feature narrower than the lattice's rounding (block.c drops rings
- * thinner than 1 unit, 2A/P).
+ * thinner than half a unit, 2A/P).
  *
  * Seams: an edge's crossings depend on the inputs only, with every
  * coordinate difference formed in integers, so both blocks sharing an edge
@@ -436,14 +438,33 @@ static int cmp_seedkey(const void *a, const void *b)
     return (x->i > y->i) - (x->i < y->i);
 }
 
-/* Seeds point p (block-local) of a small input, when inside the block. */
-static int add_seed(wm_hidden *h, const wm_field *f, int64_t x, int64_t y,
-                    int ambiguous)
+/* The cells of the block whose closed square holds block-local point
+ * (x, y), into c[] and r[]: one, two for a point on a cell's side, four
+ * for a sample; returns how many. A point on a side belongs to both cells:
+ * the boundary may turn at it in either (a lake's edge along a sample
+ * column, met there by a river's bank, leaves its land in the cell on one
+ * side and its water in the other). */
+static int cells_holding(const wm_field *f, int64_t x, int64_t y, int32_t *c,
+                         int32_t *r)
 {
-    const int32_t n = f->w - 1;
-    if (x < 0 || y < 0 || x >= (int64_t)n * WM_Q || y >= (int64_t)n * WM_Q)
-        return 1;
-    const int32_t c = (int32_t)(x / WM_Q), r = (int32_t)(y / WM_Q);
+    const int64_t n = f->w - 1;
+    const int64_t cx = wm_floordiv(x, WM_Q), cy = wm_floordiv(y, WM_Q);
+    int k = 0;
+    for (int64_t j = cy - (y % WM_Q == 0); j <= cy; j++)
+        for (int64_t i = cx - (x % WM_Q == 0); i <= cx; i++)
+            if (i >= 0 && j >= 0 && i < n && j < n)
+            {
+                c[k] = (int32_t)i;
+                r[k++] = (int32_t)j;
+            }
+    return k;
+}
+
+/* Seeds point (x, y) (block-local) in cell (c, r), made ambiguous too when
+ * `ambiguous`. */
+static int seed_cell(wm_hidden *h, const wm_field *f, int64_t x, int64_t y,
+                     int32_t c, int32_t r, int ambiguous)
+{
     if (!wm_grow((void **)&h->seed, &h->seedcap, h->nseed + 1,
                  sizeof *h->seed) ||
         !wm_grow((void **)&h->seedcell, &h->seedcellcap, h->nseed + 1,
@@ -452,6 +473,19 @@ static int add_seed(wm_hidden *h, const wm_field *f, int64_t x, int64_t y,
     h->seed[h->nseed] = (wm_pt){(int32_t)x, (int32_t)y};
     h->seedcell[h->nseed++] = cell_key(f, c, r);
     return !ambiguous || add_cell(h, f, c, r);
+}
+
+/* Seeds point (x, y) (block-local) of a small input in every cell of the
+ * block holding it. */
+static int add_seed(wm_hidden *h, const wm_field *f, int64_t x, int64_t y,
+                    int ambiguous)
+{
+    int32_t c[4], r[4];
+    const int k = cells_holding(f, x, y, c, r);
+    for (int i = 0; i < k; i++)
+        if (!seed_cell(h, f, x, y, c[i], r[i], ambiguous))
+            return 0;
+    return 1;
 }
 
 /* Seeds the tips of thin segment g's caps that lie on the union's
@@ -557,15 +591,20 @@ static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
  * depend on which corners of shared ends a job finds. */
 static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
-    seedkey *o = malloc((probe->ncorner + 1) * sizeof *o);
+    seedkey *o = malloc((4 * probe->ncorner + 1) * sizeof *o);
     if (!o)
         return 0;
     size_t n = 0;
     for (size_t i = 0; i < probe->ncorner; i++)
-        if (!probe->corner_joint[i])
-            o[n++] = (seedkey){cell_key(f, probe->corner[i].x / WM_Q,
-                                        probe->corner[i].y / WM_Q),
-                               i};
+    {
+        int32_t c[4], r[4];
+        const int k = probe->corner_joint[i]
+                          ? 0
+                          : cells_holding(f, probe->corner[i].x,
+                                          probe->corner[i].y, c, r);
+        for (int j = 0; j < k; j++)
+            o[n++] = (seedkey){cell_key(f, c[j], r[j]), i};
+    }
     qsort(o, n, sizeof *o, cmp_seedkey);
     int ok = 1;
     for (size_t a = 0, z; ok && a < n; a = z)
@@ -582,10 +621,12 @@ static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
             else
                 kept++;
         }
+        int32_t c, r;
+        cell_of(f, o[a].key, &c, &r);
         for (size_t i = a; ok && kept >= 2 && i < z; i++)
             if (o[i].i != SIZE_MAX)
-                ok = add_seed(h, f, probe->corner[o[i].i].x,
-                              probe->corner[o[i].i].y, 1);
+                ok = seed_cell(h, f, probe->corner[o[i].i].x,
+                               probe->corner[o[i].i].y, c, r, 1);
     }
     free(o);
     return ok;
@@ -643,9 +684,16 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
     for (size_t i = 0; i < probe->ncorner; i++)
     {
         const wm_pt p = probe->corner[i];
-        if (off_contour(f, p.x / WM_Q, p.y / WM_Q, p) && !buried(probe, p) &&
-            !add_seed(h, f, p.x, p.y, 1))
-            return 0;
+        int32_t c[4], r[4];
+        const int k = cells_holding(f, p.x, p.y, c, r);
+        for (int j = 0, checked = 0; j < k; j++)
+            if (off_contour(f, c[j], r[j], p))
+            {
+                if (!checked++ && buried(probe, p))
+                    break;
+                if (!seed_cell(h, f, p.x, p.y, c[j], r[j], 1))
+                    return 0;
+            }
     }
     return crowded_cells(h, f, probe);
 }
@@ -659,12 +707,17 @@ static int steer_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
     for (size_t i = 0; i < probe->ncorner; i++)
     {
         const wm_pt p = probe->corner[i];
-        const int32_t c = p.x / WM_Q, r = p.y / WM_Q;
-        const uint64_t key = cell_key(f, c, r);
-        const size_t k = lower_u64(h->cell, h->ncell, key);
-        if (k < h->ncell && h->cell[k] == key && !off_contour(f, c, r, p) &&
-            !buried(probe, p) && !add_seed(h, f, p.x, p.y, 0))
-            return 0;
+        int32_t c[4], r[4];
+        const int k = cells_holding(f, p.x, p.y, c, r);
+        for (int j = 0; j < k; j++)
+        {
+            const uint64_t key = cell_key(f, c[j], r[j]);
+            const size_t at = lower_u64(h->cell, h->ncell, key);
+            if (at < h->ncell && h->cell[at] == key &&
+                !off_contour(f, c[j], r[j], p) && !buried(probe, p) &&
+                !seed_cell(h, f, p.x, p.y, c[j], r[j], 0))
+                return 0;
+        }
     }
     return 1;
 }
