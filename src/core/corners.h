@@ -18,7 +18,8 @@ extern "C"
      * union boundary: the crossings of two input boundaries (river banks
      * and end circles, lake edges) strictly inside the block, whose nearest
      * sample of f is within 0.75 pixel of the boundary, snapped to the
-     * lattice, sorted and distinct. Some are buried under a third input.
+     * lattice (and, within a unit of the block square, one unit inside
+     * it), sorted and distinct. Some are buried under a third input.
      */
     wm_status wm_corners_find(wm_probe *probe, const wm_field *f,
                               const wm_ctx *ctx);
