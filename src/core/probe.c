@@ -541,9 +541,15 @@ static int lake_intervals(wm_probe *in, wm_pt P, int vertical, int32_t L,
             if (i > j)
             {
                 /* the piece's class by the exact ray rule at a lattice
-                 * point inside it; a piece with none is too thin to tell
+                 * point inside it, not at a toggle (an edge through a
+                 * lattice point toggles there, and the rule's class of a
+                 * point of an edge may be either: an island 0.1 pixel wide
+                 * in a lake was lost so); the last piece's may be the
+                 * segment's end; a piece with none is too thin to tell
                  * and keeps the class before it */
-                const double c = ceil(from), f = floor(to);
+                double c = ceil(from), f = floor(to);
+                c += c == from; /* from is a toggle */
+                f -= i < j1 && f == to;
                 if (c <= f && c >= 0 && f <= L)
                 {
                     const double t = floor((c + f) / 2);
