@@ -276,7 +276,7 @@ def test_hausdorff(scene):
     """SIMPLIFY=0: the boundary within half a pixel of the exact union's:
     wedges to their tip, strips between near-parallel rivers, islands and
     ponds, streams narrower than a pixel, and all of them across block
-    sides (measured 0.48 px at worst on these scenes, 0.50 px on 1,000
+    sides (measured 0.48 px at worst on these scenes, 0.50 px on 6,000
     held-out ones, bench/topology.py)."""
     fig = scene.measure('exact')
     assert fig['hausdorff_px'] <= HAUSDORFF_PX, \

@@ -253,7 +253,8 @@ static int lpush(lbuf *b, int64_t x)
  * ascending: a piece is halved at its global midpoint while it is longer
  * than its room, o->room at that midpoint (no shore is nearer), and than
  * GRADE_MIN at an end of the side edge or GRADE_INNER elsewhere (so a side
- * edge makes at most one piece per pixel and one query per piece; each
+ * edge makes at most 16 pieces per pixel, only where the shore runs that
+ * close to it, and one query per piece; each
  * query reads the edges near the point, see wm_scene_depth; the recursion
  * is as deep as log2 of the side in pixels). A piece no longer than its
  * room has its diametral circle within half the room of its midpoint,
@@ -280,10 +281,11 @@ static int grade_side(const refiner *r, int vertical, int64_t F, int64_t u,
  * so a long piece next to a short one (grading halved a piece where the
  * shore comes near the side, not its neighbour) leaves a skinny triangle
  * on it. A piece ending at a block corner (lo or hi, the square's ends
- * along the side) is balanced against GRADE_MIN / 2 beyond the corner, the
- * shortest piece the side across the corner has there when its water
- * ends at the corner. The result depends on the pieces and the corners
- * alone (passes in ascending global order), so both blocks sharing the
+ * along the side) is balanced against a piece of GRADE_MIN / 2 assumed
+ * beyond the corner (what grading usually leaves at an end; the side
+ * across the corner, which this side cannot see, is balanced alike), so
+ * it is at most 16 pixels long. The result depends on the pieces and the
+ * corners alone (passes in ascending global order), so both blocks sharing the
  * side find the same points. (A ratio of 2 cured no more triangles on the
  * synthetic L1 and L3 and added 4-6 % of them.) */
 static int balance_side(lbuf *cut, int64_t e0, int64_t e1, int64_t lo,

@@ -58,9 +58,9 @@ extern "C"
      * room of its diametral circle, so refinement next to the side seldom
      * needs to split it (the extracted shore lies within about a pixel
      * and SIMPLIFY of the inputs'); then, while a piece is more than four
-     * times as long as a neighbour (or, at a block corner, than 4
-     * pixels), it is halved too. Rounds of batch
-     * insertion (into the triangulation kept from the round before:
+     * times as long as a neighbour (or, at a block corner, than 16
+     * pixels: four times 4 pixels assumed beyond it), it is halved too. Rounds
+     * of batch insertion (into the triangulation kept from the round before:
      * wm_cdt_insert, wm_cdt_split) repeat until nothing is bad or a round
      * changes nothing; bounds
      * on rounds and points stop a run that does not converge (then `left`
