@@ -764,6 +764,19 @@ int main(void)
                in.npts, in.nrings, ms);
     }
 
+    /* 11. a stop asked for: the search returns WM_ERR_CANCELLED, no rings
+     * (a block-long river's ring kept simplifying for 1.4 s after a
+     * signal) */
+    {
+        const int stop = 1;
+        const wm_ctx ctx = {NULL, NULL, &stop};
+        wm_rings_clear(&out);
+        const wm_status st =
+            wm_simplify_rings(&in, 256 * 2048, 256, &out, &ctx);
+        TAP_OK(st == WM_ERR_CANCELLED && out.nrings == 0,
+               "cancelled: status %d, %zu rings", (int)st, out.nrings);
+    }
+
     wm_rings_free(&in);
     wm_rings_free(&out);
     wm_rings_free(&out2);

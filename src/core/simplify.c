@@ -244,14 +244,18 @@ static uint32_t s_far(const simp *sp, uint32_t a, uint32_t b)
 }
 
 /* Douglas-Peucker on the span a..b (PostGIS ptarray_simplify_in_place
- * structure): marks the kept vertices strictly between a and b. */
-static void s_dp(simp *sp, uint32_t a, uint32_t b)
+ * structure): marks the kept vertices strictly between a and b. Returns 0
+ * when cancelled (checked before each search: one scans at most the ring,
+ * some milliseconds for the 7 M vertices of a block-long river). */
+static int s_dp(simp *sp, uint32_t a, uint32_t b)
 {
     size_t top = 0;
     uint32_t i1 = a;
     sp->stack[top++] = b;
     while (top > 0)
     {
+        if (wm_cancelled(sp->ctx))
+            return 0;
         const uint32_t i2 = sp->stack[top - 1];
         const uint32_t split = s_far(sp, i1, i2);
         if (split != S_NONE &&
@@ -266,6 +270,7 @@ static void s_dp(simp *sp, uint32_t a, uint32_t b)
             top--;
         }
     }
+    return 1;
 }
 
 /* Re-links the kept vertices from u to v (u, v kept, nothing between them
@@ -895,8 +900,9 @@ static wm_status s_setup(simp *sp, const wm_rings *in, double tol,
 }
 
 /* Step 1 for a ring with no vertex on the block's sides: Douglas-Peucker
- * between its lowest vertex and the vertex farthest from it, both kept. */
-static void s_dp_free_ring(simp *sp, size_t b, size_t e, size_t r)
+ * between its lowest vertex and the vertex farthest from it, both kept.
+ * Returns 0 when cancelled. */
+static int s_dp_free_ring(simp *sp, size_t b, size_t e, size_t r)
 {
     const wm_pt *P = sp->P;
     uint32_t a0 = (uint32_t)b, a1 = S_NONE;
@@ -915,14 +921,14 @@ static void s_dp_free_ring(simp *sp, size_t b, size_t e, size_t r)
         }
     }
     sp->kept[a0] = sp->kept[a1] = 1;
-    s_dp(sp, a0, a1);
-    s_dp(sp, a1, a0);
     sp->rep[r] = a0;
+    return s_dp(sp, a0, a1) && s_dp(sp, a1, a0);
 }
 
 /* Step 1 for a ring whose vertices on the block's sides (kept, f0 the
- * first) cut it into chains: Douglas-Peucker per chain. */
-static void s_dp_fixed_ring(simp *sp, uint32_t f0, int32_t size, size_t r)
+ * first) cut it into chains: Douglas-Peucker per chain. Returns 0 when
+ * cancelled. */
+static int s_dp_fixed_ring(simp *sp, uint32_t f0, int32_t size, size_t r)
 {
     const wm_pt *P = sp->P;
     uint32_t cur = f0;
@@ -939,19 +945,21 @@ static void s_dp_fixed_ring(simp *sp, uint32_t f0, int32_t size, size_t r)
              * not; keep its farthest vertex whatever the tolerance */
             const uint32_t m = s_far(sp, cur, j);
             sp->kept[m] = 1;
-            s_dp(sp, cur, m);
-            s_dp(sp, m, j);
+            if (!s_dp(sp, cur, m) || !s_dp(sp, m, j))
+                return 0;
         }
-        else
-            s_dp(sp, cur, j);
+        else if (!s_dp(sp, cur, j))
+            return 0;
         cur = j;
     } while (cur != f0);
     sp->rep[r] = f0;
+    return 1;
 }
 
 /* Step 1: Douglas-Peucker per chain between fixed vertices (the block's
- * sides) or anchors; rings of fewer than 3 vertices pass unchanged. */
-static void s_dp_rings(simp *sp, int32_t size)
+ * sides) or anchors; rings of fewer than 3 vertices pass unchanged.
+ * Returns 0 when cancelled. */
+static int s_dp_rings(simp *sp, int32_t size)
 {
     const wm_rings *in = sp->in;
     for (size_t r = 0; r < sp->nr; r++)
@@ -972,11 +980,11 @@ static void s_dp_rings(simp *sp, int32_t size)
                 if (f0 == S_NONE)
                     f0 = (uint32_t)i;
             }
-        if (f0 == S_NONE)
-            s_dp_free_ring(sp, b, e, r);
-        else
-            s_dp_fixed_ring(sp, f0, size, r);
+        if (!(f0 == S_NONE ? s_dp_free_ring(sp, b, e, r)
+                           : s_dp_fixed_ring(sp, f0, size, r)))
+            return 0;
     }
+    return 1;
 }
 
 /* Step 2: the kept vertices linked in ring order, counted per ring. */
@@ -1181,9 +1189,10 @@ wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
     simp sp;
     memset(&sp, 0, sizeof sp);
     wm_status st = s_setup(&sp, in, tol, ctx);
+    if (st == WM_OK && !s_dp_rings(&sp, size))
+        st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
     if (st == WM_OK)
     {
-        s_dp_rings(&sp, size);
         s_link(&sp);
         st = s_three_each(&sp);
     }
