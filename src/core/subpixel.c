@@ -575,6 +575,29 @@ static int off_contour(const wm_field *f, int32_t c, int32_t r, wm_pt p)
     return 1;
 }
 
+/* Seeds corner p of the union in the cells holding it that want it: with
+ * steer 0, those where it lies off the cell's segments (off_contour; they
+ * are made ambiguous); with steer 1, the ambiguous ones (h->cell sorted)
+ * where it lies on them, to steer their subdivision. A corner buried under
+ * a third input seeds nothing. */
+static int seed_corner(wm_hidden *h, const wm_field *f, wm_probe *probe,
+                       wm_pt p, int steer)
+{
+    int32_t c[4], r[4];
+    const int k = cells_holding(f, p.x, p.y, c, r);
+    for (int j = 0, checked = 0; j < k; j++)
+    {
+        if ((steer && !wm_hidden_is_cell(h, f, c[j], r[j])) ||
+            off_contour(f, c[j], r[j], p) == steer)
+            continue;
+        if (!checked++ && buried(probe, p))
+            return 1;
+        if (!seed_cell(h, f, p.x, p.y, c[j], r[j], !steer))
+            return 0;
+    }
+    return 1;
+}
+
 /* Seeds the corners of the union that join neither two capsules sharing
  * an end nor two edges of one lake sharing a vertex (probe->corner_joint
  * is 0) in the cells holding two or more of them, and makes those cells
@@ -682,19 +705,8 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
             return 0;
     }
     for (size_t i = 0; i < probe->ncorner; i++)
-    {
-        const wm_pt p = probe->corner[i];
-        int32_t c[4], r[4];
-        const int k = cells_holding(f, p.x, p.y, c, r);
-        for (int j = 0, checked = 0; j < k; j++)
-            if (off_contour(f, c[j], r[j], p))
-            {
-                if (!checked++ && buried(probe, p))
-                    break;
-                if (!seed_cell(h, f, p.x, p.y, c[j], r[j], 1))
-                    return 0;
-            }
-    }
+        if (!seed_corner(h, f, probe, probe->corner[i], 0))
+            return 0;
     return crowded_cells(h, f, probe);
 }
 
@@ -705,20 +717,8 @@ static int add_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
 static int steer_seeds(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
     for (size_t i = 0; i < probe->ncorner; i++)
-    {
-        const wm_pt p = probe->corner[i];
-        int32_t c[4], r[4];
-        const int k = cells_holding(f, p.x, p.y, c, r);
-        for (int j = 0; j < k; j++)
-        {
-            const uint64_t key = cell_key(f, c[j], r[j]);
-            const size_t at = lower_u64(h->cell, h->ncell, key);
-            if (at < h->ncell && h->cell[at] == key &&
-                !off_contour(f, c[j], r[j], p) && !buried(probe, p) &&
-                !seed_cell(h, f, p.x, p.y, c[j], r[j], 0))
-                return 0;
-        }
-    }
+        if (!seed_corner(h, f, probe, probe->corner[i], 1))
+            return 0;
     return 1;
 }
 
