@@ -5,6 +5,19 @@
 
 #include "lattice.h"
 
+#include <string.h>
+
+/* Whether a and b are the same rings, point for point. */
+static inline int rings_equal(const wm_rings *a, const wm_rings *b)
+{
+    if (a->nrings != b->nrings || a->npts != b->npts)
+        return 0;
+    if (a->nrings &&
+        memcmp(a->start, b->start, (a->nrings + 1) * sizeof *a->start))
+        return 0;
+    return a->npts == 0 || !memcmp(a->pts, b->pts, a->npts * sizeof *a->pts);
+}
+
 /* Number of pairs of ring edges that meet, other than consecutive edges of
  * one ring at their shared vertex: 0 for simple, disjoint rings. O(n^2). */
 static inline int ring_meetings(const wm_rings *r)

@@ -158,16 +158,6 @@ static wm_status trace_mask(const uint8_t *m, int32_t w, int32_t h,
     return s;
 }
 
-static int same_rings(const wm_rings *a, const wm_rings *b)
-{
-    if (a->nrings != b->nrings || a->npts != b->npts)
-        return 0;
-    if (a->nrings &&
-        memcmp(a->start, b->start, (a->nrings + 1) * sizeof *a->start))
-        return 0;
-    return a->npts == 0 || !memcmp(a->pts, b->pts, a->npts * sizeof *a->pts);
-}
-
 static uint32_t rng_state = 2463534242u;
 static uint32_t rnd(void)
 {
@@ -465,7 +455,7 @@ static void test_heuristics(void)
     TAP_EQ(trace_mask(m, w, 6, WM_HEUR_CLOSEST, &r[1], &st[1]), WM_OK,
            "same with CLOSEST");
     TAP_EQ(st[1].backtracks, 0, "no dead end");
-    TAP_OK(same_rings(&r[0], &r[1]), "same triangle");
+    TAP_OK(rings_equal(&r[0], &r[1]), "same triangle");
     free(m);
     for (int i = 0; i < 4; i++)
         wm_rings_free(&r[i]);
@@ -626,7 +616,7 @@ static void test_random(void)
             if (hh == WM_HEUR_DIRECTIONAL_CW)
                 cw_exact += st.shortcuts == 0;
             trace_mask(m, N, N, (wm_heuristic)hh, &r2, &st2);
-            det += !same_rings(&r, &r2);
+            det += !rings_equal(&r, &r2);
         }
     }
     for (int hh = 0; hh < 4; hh++)
