@@ -518,7 +518,10 @@ def topology_figures(drv, orc, block_size, px):
         what a ring within half a pixel of it may measure);
       lost_outer / lost_hole: oracle rings touching no block side, bounding
         box under SMALL_PX on both axes (small_outer / small_hole of them),
-        with no output ring of the same kind within LOST_PX;
+        with no output ring of the same kind within LOST_PX; not those that
+        touch another oracle ring at a point (a lake's even-odd lens where
+        two of its holes overlap meets the lake's water at the holes'
+        crossings: the output may join it to that water there, one ring);
       ring_diff: sum over blocks and kinds of |output rings - oracle rings|;
       speck_at / lost_at: up to 5 (kind, x, y) each."""
     dr = block_rings(drv, block_size, SPECK_PX * px)
@@ -536,6 +539,8 @@ def topology_figures(drv, orc, block_size, px):
     for o in orr:
         if o.touches or o.size() >= SMALL_PX * px:
             continue
+        if any(q is not o and q.block == o.block and o.near(q, 1e-9) for q in orr):
+            continue  # pinched to another ring
         out['small_' + o.kind] += 1
         if not any(r.kind == o.kind and r.near(o, LOST_PX * px) for r in dr):
             out['lost_' + o.kind] += 1

@@ -627,6 +627,28 @@ static wm_status whole_square(const wm_field *f, int32_t S, wm_rings *out,
     return wm_rings_close(out) == WM_OK ? WM_OK : nomem(ctx);
 }
 
+/* Hands the probe the cells whose segments took exact crossings: the
+ * ambiguous ones and the linked ones, merged (both sorted). */
+static int keep_rebuilt(const wm_hidden *h, wm_probe *probe)
+{
+    free(probe->rebuilt);
+    probe->nrebuilt = 0;
+    probe->rebuilt = malloc((h->ncell + h->nlink + 1) * sizeof *probe->rebuilt);
+    if (!probe->rebuilt)
+        return 0;
+    size_t i = 0, j = 0, n = 0;
+    while (i < h->ncell || j < h->nlink)
+    {
+        const uint64_t a = i < h->ncell ? h->cell[i] : UINT64_MAX;
+        const uint64_t b = j < h->nlink ? h->link[j] : UINT64_MAX;
+        probe->rebuilt[n++] = a < b ? a : b;
+        i += a <= b;
+        j += b <= a;
+    }
+    probe->nrebuilt = n;
+    return 1;
+}
+
 wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
                                     wm_rings *out, const wm_ctx *ctx)
 {
@@ -651,6 +673,8 @@ wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
         st = closed_loops(&s, out, ctx);
     if (st == WM_OK && nent == 0)
         st = whole_square(f, S, out, ctx);
+    if (st == WM_OK && probe && !keep_rebuilt(&s.hid, probe))
+        st = nomem(ctx);
     free(s.segs);
     free(s.tiles);
     wm_hidden_free(&s.hid);

@@ -33,7 +33,8 @@ extern "C"
      * wm_contour_extract with the block's inputs at hand (`probe`; NULL: as
      * wm_contour_extract): where the samples cannot decide (subpixel.h:
      * hidden and loose crossings, saddle cells, features inside one cell)
-     * the boundary is rebuilt exactly from the inputs.
+     * the boundary is rebuilt exactly from the inputs. The cells so
+     * rebuilt are left in probe->rebuilt for crease.c.
      */
     wm_status wm_contour_extract_probed(const wm_field *f, wm_probe *probe,
                                         wm_rings *out, const wm_ctx *ctx);

@@ -288,8 +288,10 @@ static int visit_edges(ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
 
 /* How many of the nearest edges a corner may split (with their
  * neighbours): the nearest may belong to another part of the rings (the
- * far bank of a narrow river beside a wedge's tip). */
-#define NEAREST 4
+ * far bank of a narrow river beside a wedge's tip; at a hairpin's tip the
+ * far banks of both arms, two edges each, were all nearer than the edge
+ * that cut the tip). */
+#define NEAREST 8
 
 /* nearest edges search state: best[0] <= best[1] <= ..., n of them */
 typedef struct
@@ -770,7 +772,9 @@ wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
     const size_t ncand = in->ncorner;
     /* open unless within a quarter pixel of the contour edge of their own
      * cell (a ring edge: the nearest edge search would find it or a nearer
-     * one and skip them) */
+     * one and skip them); not where the contour took exact crossings or
+     * rebuilt the cell (probe->rebuilt), whose ring edge lies elsewhere (a
+     * wedge's tip was left 0.64 pixel from it so) */
     corner *cs = malloc(ncand * sizeof *cs);
     if (!cs)
         goto nomem;
@@ -786,7 +790,8 @@ wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
         wm_pt a, b;
         const int close =
             wm_contour_cell_edge(f, c.x / WM_Q, c.y / WM_Q, &a, &b) &&
-            edge_dist(a, b, c.x, c.y) <= WM_Q / 4.0;
+            edge_dist(a, b, c.x, c.y) <= WM_Q / 4.0 &&
+            !wm_probe_rebuilt(in, f, c.x / WM_Q, c.y / WM_Q);
         cs[i] =
             (corner){c, close ? a : c, close ? b : c, close ? C_CLOSE : C_OPEN};
     }

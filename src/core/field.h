@@ -138,6 +138,17 @@ extern "C"
      *  calls it once its values are set. Returns WM_ERR_NOMEM or WM_OK. */
     wm_status wm_field_index(wm_field *f);
 
+    /** A key of cell (c, r) of f, tile by tile (tile index << 32 | (r %
+     *  WM_TILE) * WM_TILE + c % WM_TILE): the cells of a tile are one run of
+     *  sorted keys. */
+    static inline uint64_t wm_field_cell_key(const wm_field *f, int32_t c,
+                                             int32_t r)
+    {
+        const uint64_t t = (uint64_t)(r / WM_TILE) * (uint64_t)f->ntx +
+                           (uint64_t)(c / WM_TILE);
+        return t << 32 | (uint64_t)((r % WM_TILE) * WM_TILE + c % WM_TILE);
+    }
+
     /** The bits (wm_field.bits) of the k-th MIXED tile. */
     static inline const uint64_t *wm_field_bits(const wm_field *f, size_t k)
     {

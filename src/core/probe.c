@@ -797,7 +797,23 @@ void wm_probe_free(wm_probe *p)
     free(p->tg);
     free(p->corner);
     free(p->corner_joint);
+    free(p->rebuilt);
     const wm_scene *s = p->s;
     memset(p, 0, sizeof *p);
     p->s = s;
+}
+
+int wm_probe_rebuilt(const wm_probe *p, const wm_field *f, int32_t c, int32_t r)
+{
+    const uint64_t key = wm_field_cell_key(f, c, r);
+    size_t lo = 0, hi = p->nrebuilt;
+    while (lo < hi)
+    {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (p->rebuilt[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < p->nrebuilt && p->rebuilt[lo] == key;
 }

@@ -5,6 +5,7 @@
 #ifndef WM_PROBE_H
 #define WM_PROBE_H
 
+#include "field.h"
 #include "scene.h"
 
 #ifdef __cplusplus
@@ -57,6 +58,13 @@ extern "C"
         uint8_t *corner_joint;
         size_t ncorner;
         int corners_found;
+        /** the cells whose ring edges the contour took from exact
+         *  crossings (ambiguous cells, and those with a side listed), as
+         *  sorted wm_field_cell_key()s: there the ring is not what
+         *  wm_contour_cell_edge() interpolates (owned; set by
+         *  wm_contour_extract_probed, read by crease.c) */
+        uint64_t *rebuilt;
+        size_t nrebuilt;
         /* scratch of a query (owned): per polygon slot, and growable lists */
         uint8_t *par;
         double *dmin;
@@ -66,6 +74,10 @@ extern "C"
         struct wm_probe_toggle *tg;
         size_t tgcap;
     } wm_probe;
+
+    /** Whether cell (c, r) of block field f is in p->rebuilt. */
+    int wm_probe_rebuilt(const wm_probe *p, const wm_field *f, int32_t c,
+                         int32_t r);
 
     /**
      * Sets up the probe of block (bx, by) of scene s (which must outlive

@@ -86,13 +86,6 @@ static uint64_t edge_id(int32_t n, int32_t c, int32_t r, int vertical)
            (uint64_t)vertical;
 }
 
-static uint64_t cell_key(const wm_field *f, int32_t c, int32_t r)
-{
-    const uint64_t t =
-        (uint64_t)(r / WM_TILE) * (uint64_t)f->ntx + (uint64_t)(c / WM_TILE);
-    return t << 32 | (uint64_t)((r % WM_TILE) * WM_TILE + c % WM_TILE);
-}
-
 /* The first index of sorted a[0 .. n) holding a key >= key. */
 static size_t lower_u64(const uint64_t *a, size_t n, uint64_t key)
 {
@@ -171,7 +164,7 @@ static int add_cell(wm_hidden *h, const wm_field *f, int32_t c, int32_t r)
         return 1;
     if (!wm_grow((void **)&h->cell, &h->cellcap, h->ncell + 1, sizeof *h->cell))
         return 0;
-    h->cell[h->ncell++] = cell_key(f, c, r);
+    h->cell[h->ncell++] = wm_field_cell_key(f, c, r);
     return 1;
 }
 
@@ -415,7 +408,7 @@ static int exact_sides(wm_hidden *h, const wm_field *f, wm_probe *probe)
             /* the cell across */
             const int32_t oc = side == 1 ? c + 1 : (side == 3 ? c - 1 : c);
             const int32_t orow = side == 2 ? r + 1 : (side == 0 ? r - 1 : r);
-            const int b = keyset_add(&cells, cell_key(f, oc, orow));
+            const int b = keyset_add(&cells, wm_field_cell_key(f, oc, orow));
             ok = b >= 0 && (b == 0 || add_cell(h, f, oc, orow));
         }
     }
@@ -471,7 +464,7 @@ static int seed_cell(wm_hidden *h, const wm_field *f, int64_t x, int64_t y,
                  sizeof *h->seedcell))
         return 0;
     h->seed[h->nseed] = (wm_pt){(int32_t)x, (int32_t)y};
-    h->seedcell[h->nseed++] = cell_key(f, c, r);
+    h->seedcell[h->nseed++] = wm_field_cell_key(f, c, r);
     return !ambiguous || add_cell(h, f, c, r);
 }
 
@@ -626,7 +619,7 @@ static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
                           : cells_holding(f, probe->corner[i].x,
                                           probe->corner[i].y, c, r);
         for (int j = 0; j < k; j++)
-            o[n++] = (seedkey){cell_key(f, c[j], r[j]), i};
+            o[n++] = (seedkey){wm_field_cell_key(f, c[j], r[j]), i};
     }
     qsort(o, n, sizeof *o, cmp_seedkey);
     int ok = 1;
@@ -759,7 +752,7 @@ static int add_link(wm_hidden *h, const wm_field *f, int32_t c, int32_t r)
         return 1;
     if (!wm_grow((void **)&h->link, &h->linkcap, h->nlink + 1, sizeof *h->link))
         return 0;
-    h->link[h->nlink++] = cell_key(f, c, r);
+    h->link[h->nlink++] = wm_field_cell_key(f, c, r);
     return 1;
 }
 
@@ -1005,7 +998,7 @@ int wm_hidden_is_cell(const wm_hidden *h, const wm_field *f, int32_t c,
     const int32_t n = f->w - 1;
     if (h->ncell == 0 || c < 0 || r < 0 || c >= n || r >= n)
         return 0;
-    const uint64_t key = cell_key(f, c, r);
+    const uint64_t key = wm_field_cell_key(f, c, r);
     const size_t lo = lower_u64(h->cell, h->ncell, key);
     return lo < h->ncell && h->cell[lo] == key;
 }
@@ -1107,9 +1100,28 @@ static int taken(const rect *q, int s, int32_t v)
     return 0;
 }
 
+/* Whether a seed lies on side s of q at position v: a lake's vertex on a
+ * sample row or column, say, whose water touches the side there though the
+ * side holds no crossing (two coincide at a touching point, and cancel). */
+static int seed_on(const rect *q, int s, int32_t v)
+{
+    for (size_t i = 0; i < q->nseed; i++)
+    {
+        const wm_pt p = q->seed[i];
+        if (s == SB || s == ST ? p.x == v && p.y == (s == SB ? q->y0 : q->y1)
+                               : p.y == v && p.x == (s == SL ? q->x0 : q->x1))
+            return 1;
+    }
+    return 0;
+}
+
 /* A split position in [lo + 3, hi - 3], nearest the middle, on no crossing
- * of sides a and b; or -1. Parts at least 3 units wide: a part's side then
- * holds two crossings, those of a strip one unit wide. */
+ * and no seed of sides a and b; or -1. Parts at least 3 units wide: a
+ * part's side then holds two crossings, those of a strip one unit wide. A
+ * dividing segment's end classes are those of the sides at its ends, which
+ * at a crossing, or at a seed where water touches a side, are not its
+ * ends' classes (a lake 0.18 pixel wide touching a cell's side at its
+ * vertex vanished so). */
 static int32_t split_at(const rect *q, int32_t lo, int32_t hi, int a, int b)
 {
     const int32_t mid = lo + (hi - lo) / 2;
@@ -1119,7 +1131,8 @@ static int32_t split_at(const rect *q, int32_t lo, int32_t hi, int a, int b)
             const int32_t v = sgn ? mid + d : mid - d;
             if (v < lo + 3 || v > hi - 3)
                 continue;
-            if (!taken(q, a, v) && !taken(q, b, v))
+            if (!taken(q, a, v) && !taken(q, b, v) && !seed_on(q, a, v) &&
+                !seed_on(q, b, v))
                 return v;
         }
     return -1;
@@ -1374,7 +1387,7 @@ static int hidden_cell(const wm_field *f, wm_probe *probe, const wm_hidden *h,
         q.side[s] = buf + s * MAXCROSS;
     }
     /* the cell's seeds */
-    const uint64_t key = cell_key(f, c, r);
+    const uint64_t key = wm_field_cell_key(f, c, r);
     size_t lo = lower_u64(h->seedcell, h->nseed, key);
     q.seed = h->seed ? h->seed + lo : NULL;
     while (lo < h->nseed && h->seedcell[lo] == key)

@@ -26,8 +26,8 @@ extern "C"
      * The hidden crossings of a block and its ambiguous cells.
      * Edge id: horizontal edge from sample (c, r) to (c + 1, r) is
      * 2 * (r * (n + 1) + c), vertical from (c, r) to (c, r + 1) that + 1.
-     * A cell is keyed (tile index << 32 | (r % WM_TILE) * WM_TILE +
-     * c % WM_TILE), so the cells of a tile are one sorted run.
+     * A cell is keyed by wm_field_cell_key(), so the cells of a tile are
+     * one sorted run.
      */
     typedef struct
     {
