@@ -509,38 +509,55 @@ def block_rings(by_block, block_size, diam_limit):
     return out
 
 
+def pinched(rings):
+    """The rings that touch another ring of their block at a point, or
+    themselves (a vertex met twice): where the exact union's pieces meet at
+    a point, as the even-odd parts of a lake whose holes overlap do."""
+    out = []
+    for o in rings:
+        pts = [tuple(p) for p in o.coords[:-1].tolist()]
+        if len(set(pts)) < len(pts) or any(
+                q is not o and q.block == o.block and o.near(q, 1e-9) for q in rings):
+            out.append(o)
+    return out
+
+
 def topology_figures(drv, orc, block_size, px):
     """Ring topology of the output `drv` against the oracle `orc`:
       specks_outer / specks_hole: output rings touching no side of their
         block whose vertices all lie within SPECK_PX of each other (max
         pairwise distance), with no oracle ring of the same kind within
         MATCH_PX that is that small too (diameter <= the speck's + MATCH_PX:
-        what a ring within half a pixel of it may measure);
+        what a ring within half a pixel of it may measure), and no pinched
+        oracle ring (pinched()) within MATCH_PX: where pieces of the exact
+        union meet at a point, the output may give a piece its own ring;
       lost_outer / lost_hole: oracle rings touching no block side, bounding
         box under SMALL_PX on both axes (small_outer / small_hole of them),
-        with no output ring of the same kind within LOST_PX; not those that
-        touch another oracle ring at a point (a lake's even-odd lens where
-        two of its holes overlap meets the lake's water at the holes'
-        crossings: the output may join it to that water there, one ring);
+        with no output ring of the same kind within LOST_PX; not pinched
+        ones (pinched(): a lake's even-odd lens where two of its holes
+        overlap meets the lake's water at their crossings, and the output
+        may join it to that water there, one ring);
       ring_diff: sum over blocks and kinds of |output rings - oracle rings|;
       speck_at / lost_at: up to 5 (kind, x, y) each."""
     dr = block_rings(drv, block_size, SPECK_PX * px)
     orr = block_rings(orc, block_size, (SPECK_PX + MATCH_PX) * px)
+    pinch = pinched(orr)
     out = dict(specks_outer=0, specks_hole=0, lost_outer=0, lost_hole=0, small_outer=0,
                small_hole=0, speck_at=[], lost_at=[])
     for r in dr:
         if r.touches or r.diam > SPECK_PX * px:
             continue
         if not any(o.kind == r.kind and o.diam <= r.diam + MATCH_PX * px and
-                   o.near(r, MATCH_PX * px) for o in orr):
+                   o.near(r, MATCH_PX * px) for o in orr) and \
+                not any(o.near(r, MATCH_PX * px) for o in pinch):
             out['specks_' + r.kind] += 1
             if len(out['speck_at']) < 5:
                 out['speck_at'].append((r.kind,) + r.center())
     for o in orr:
         if o.touches or o.size() >= SMALL_PX * px:
             continue
-        if any(q is not o and q.block == o.block and o.near(q, 1e-9) for q in orr):
-            continue  # pinched to another ring
+        if o in pinch:
+            continue
         out['small_' + o.kind] += 1
         if not any(r.kind == o.kind and r.near(o, LOST_PX * px) for r in dr):
             out['lost_' + o.kind] += 1
