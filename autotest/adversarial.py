@@ -62,7 +62,7 @@ from collections import Counter, defaultdict
 
 import numpy as np
 from osgeo import ogr
-from shapely.geometry import GeometryCollection, LinearRing, box
+from shapely.geometry import GeometryCollection, LinearRing, Point, box
 from shapely.ops import unary_union
 
 import oracle
@@ -509,17 +509,30 @@ def block_rings(by_block, block_size, diam_limit):
     return out
 
 
-def pinched(rings):
-    """The rings that touch another ring of their block at a point, or
-    themselves (a vertex met twice): where the exact union's pieces meet at
-    a point, as the even-odd parts of a lake whose holes overlap do."""
-    out = []
+def pinch_points(rings):
+    """Where the exact union's pieces meet at a point, as the even-odd parts
+    of a lake whose holes overlap do: the points where two rings of a block
+    touch, and the vertices a ring meets twice, as {block: [Point]}; and
+    the ids of the rings that hold one."""
+    by_block = defaultdict(list)
     for o in rings:
-        pts = [tuple(p) for p in o.coords[:-1].tolist()]
-        if len(set(pts)) < len(pts) or any(
-                q is not o and q.block == o.block and o.near(q, 1e-9) for q in rings):
-            out.append(o)
-    return out
+        by_block[o.block].append(o)
+    points, ids = defaultdict(list), set()
+    for b, rs in by_block.items():
+        for i, o in enumerate(rs):
+            pts = [tuple(p) for p in o.coords[:-1].tolist()]
+            seen = Counter(pts)
+            twice = [Point(p) for p, n in seen.items() if n > 1]
+            if twice:
+                points[b].extend(twice)
+                ids.add(id(o))
+            for q in rs[i + 1:]:
+                if o.near(q, 1e-9):
+                    meet = o.line.intersection(q.line)
+                    points[b].extend(g for g in getattr(meet, 'geoms', [meet])
+                                     if g.geom_type == 'Point')
+                    ids.update((id(o), id(q)))
+    return points, ids
 
 
 def topology_figures(drv, orc, block_size, px):
@@ -528,38 +541,40 @@ def topology_figures(drv, orc, block_size, px):
         block whose vertices all lie within SPECK_PX of each other (max
         pairwise distance), with no oracle ring of the same kind within
         MATCH_PX that is that small too (diameter <= the speck's + MATCH_PX:
-        what a ring within half a pixel of it may measure), and no pinched
-        oracle ring (pinched()) within MATCH_PX: where pieces of the exact
-        union meet at a point, the output may give a piece its own ring;
+        what a ring within half a pixel of it may measure), and no pinch
+        point of the oracle (pinch_points) within MATCH_PX: where pieces of
+        the exact union meet at a point, the output may give a piece its own
+        ring;
       lost_outer / lost_hole: oracle rings touching no block side, bounding
         box under SMALL_PX on both axes (small_outer / small_hole of them),
-        with no output ring of the same kind within LOST_PX; not pinched
-        ones (pinched(): a lake's even-odd lens where two of its holes
-        overlap meets the lake's water at their crossings, and the output
-        may join it to that water there, one ring);
+        with no output ring of the same kind within LOST_PX (of any kind for
+        a ring with a pinch point: a lake's even-odd lens where two of its
+        holes overlap meets the lake's water at their crossings, and the
+        output may join it to that water there, the hole around it one
+        ring); pinched: how many rings had a pinch point (so excused);
       ring_diff: sum over blocks and kinds of |output rings - oracle rings|;
       speck_at / lost_at: up to 5 (kind, x, y) each."""
     dr = block_rings(drv, block_size, SPECK_PX * px)
     orr = block_rings(orc, block_size, (SPECK_PX + MATCH_PX) * px)
-    pinch = pinched(orr)
+    pinch, pinched = pinch_points(orr)
     out = dict(specks_outer=0, specks_hole=0, lost_outer=0, lost_hole=0, small_outer=0,
-               small_hole=0, speck_at=[], lost_at=[])
+               small_hole=0, speck_at=[], lost_at=[], pinched=len(pinched))
     for r in dr:
         if r.touches or r.diam > SPECK_PX * px:
             continue
         if not any(o.kind == r.kind and o.diam <= r.diam + MATCH_PX * px and
                    o.near(r, MATCH_PX * px) for o in orr) and \
-                not any(o.near(r, MATCH_PX * px) for o in pinch):
+                not any(r.line is not None and r.line.distance(q) <= MATCH_PX * px
+                        for q in pinch.get(r.block, ())):
             out['specks_' + r.kind] += 1
             if len(out['speck_at']) < 5:
                 out['speck_at'].append((r.kind,) + r.center())
     for o in orr:
         if o.touches or o.size() >= SMALL_PX * px:
             continue
-        if o in pinch:
-            continue
         out['small_' + o.kind] += 1
-        if not any(r.kind == o.kind and r.near(o, LOST_PX * px) for r in dr):
+        any_kind = id(o) in pinched
+        if not any((any_kind or r.kind == o.kind) and r.near(o, LOST_PX * px) for r in dr):
             out['lost_' + o.kind] += 1
             if len(out['lost_at']) < 5:
                 out['lost_at'].append((o.kind,) + o.center())

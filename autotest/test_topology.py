@@ -63,11 +63,13 @@ SEEDS = range(int(os.environ.get('WM_TOPOLOGY_SEEDS', '40')))
 # lattice unit off a block side lost with its corner (0.58 px); seeds
 # 99000-99299, a lake's island lost where its edge crossed a dividing
 # segment at a lattice point, classed by the ray rule on the edge (6.5 px);
-# at 2:256 (seeds 101000-101499) a hairpin's tip whose nearest ring edges
-# were the far banks of both arms, and a tip whose cell's sides had exact
-# crossings while the interpolated edge ran a quarter pixel from it (0.64 and
-# 0.62 px); at 0.25:32 (seeds 100000-100499) a lake 0.18 px wide touching a
-# sample row at its vertex, lost where a dividing segment ended there (4 px)
+# at 2:256 (seeds 101000-101499) two wedge tips skipped by the corner
+# recovery because their cell's interpolated edge ran within a quarter pixel
+# while the contour had taken exact crossings there (0.62 px), the hairpin's
+# one then also out of reach of its 4 nearest edges, the far banks of both
+# arms (0.64 px); at 0.25:32 (seeds 100000-100499) a lake 0.18 px wide
+# touching a sample row at its vertex, lost where a dividing segment ended
+# there (4 px)
 REGRESSIONS = ['shore-94103', 'island-94499', 'island-94036', 'seam-98214@1:128',
                'island-99111', 'wedge-101159@2:256', 'seam-101080@2:256',
                'subpixel-100273@0.25:32']

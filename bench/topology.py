@@ -26,11 +26,18 @@ family:
                side of their block, and for which the oracle has no ring of
                the same kind within 1 px that is that small too (diameter
                <= the speck's + 1 px: what a ring within 0.5 px of it may
-               measure): tiny rings the exact union does not have
+               measure): tiny rings the exact union does not have; not
+               within 1 px of a pinch point (where pieces of the exact union
+               meet at a point, the output may give a piece its own ring)
   lost         oracle rings touching no block side, bounding box under 2 px
                (both sides), with no output ring of the same kind within
-               1 px: small islands and lakes that vanished; "/ small": how
-               many such small oracle rings the scenes have
+               1 px (of any kind for a ring with a pinch point: a lens may
+               be joined to the water it touches): small islands and lakes
+               that vanished; "/ small": how many such small oracle rings
+               the scenes have
+  pinched      oracle rings with a pinch point (touching another ring or
+               themselves at a point: the even-odd parts of an invalid lake
+               whose holes overlap), so excused as above
   ring diff    sum over blocks and ring kinds of |output rings - oracle
                rings| (dashed rivers, rows of holes, merged strips)
   symdiff      area of the symmetric difference with the oracle, m², summed
@@ -221,6 +228,7 @@ def family_row(family, recs, dists):
             '%d (%d / %d)' % (so + sh, so, sh),
             '%d / %d (%d / %d)' % (lo + lh, smo + smh, lo, lh),
             str(sum(r['ring_diff'] for r in ok)),
+            str(sum(r.get('pinched', 0) for r in ok)),
             '%.2f (%.3f %%)' % (sd, 100.0 * sd / oa if oa else 0.0),
             '%.3f' % (100.0 * max([abs(r['rel_area_diff']) for r in big] or [0.0])),
             str(sum(r['invalid'] for r in ok)),
@@ -231,7 +239,8 @@ def family_row(family, recs, dists):
 
 
 HEADER = ['family', 'scenes', 'H max px', 'H p99 px', '>0.5px', 'specks (outer / hole)',
-          'lost / small (lost outer / hole)', 'ring diff', 'symdiff m² (rel)', 'area max %', 'invalid',
+          'lost / small (lost outer / hole)', 'ring diff', 'pinched', 'symdiff m² (rel)', 'area max %',
+          'invalid',
           'seams', 'errors', 's/scene run / check']
 
 

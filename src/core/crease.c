@@ -772,9 +772,9 @@ wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
     const size_t ncand = in->ncorner;
     /* open unless within a quarter pixel of the contour edge of their own
      * cell (a ring edge: the nearest edge search would find it or a nearer
-     * one and skip them); not where the contour took exact crossings or
-     * rebuilt the cell (probe->rebuilt), whose ring edge lies elsewhere (a
-     * wedge's tip was left 0.64 pixel from it so) */
+     * one and skip them); not where the contour may have taken exact
+     * crossings or rebuilt the cell (probe->rebuilt), whose ring edge may
+     * lie elsewhere (wedge tips were left 0.62 and 0.64 pixel from it so) */
     corner *cs = malloc(ncand * sizeof *cs);
     if (!cs)
         goto nomem;

@@ -39,7 +39,10 @@ extern "C"
 
     /**
      * wm_crease_recover with the block's probe already set up (the block
-     * is the probe's).
+     * is the probe's), after wm_contour_extract_probed made `rings` with
+     * it: its probe->rebuilt tells the cells where the rings are not the
+     * interpolated edges (an empty list, as after wm_probe_init, is right
+     * only for rings from wm_contour_extract).
      */
     wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
                                        wm_rings *rings, const wm_ctx *ctx);

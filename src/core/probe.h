@@ -18,7 +18,9 @@ extern "C"
 
     /**
      * The inputs in reach of one block, with an index of its river segments
-     * by 16-pixel cell. Fields are read-only after wm_probe_init.
+     * by 16-pixel cell. The inputs and indexes are read-only after
+     * wm_probe_init; what the block's stages find once and share (corners,
+     * rebuilt cells) and the query scratch are written later.
      */
     struct wm_probe_edge;
     struct wm_probe_toggle;
@@ -58,11 +60,12 @@ extern "C"
         uint8_t *corner_joint;
         size_t ncorner;
         int corners_found;
-        /** the cells whose ring edges the contour took from exact
-         *  crossings (ambiguous cells, and those with a side listed), as
-         *  sorted wm_field_cell_key()s: there the ring is not what
-         *  wm_contour_cell_edge() interpolates (owned; set by
-         *  wm_contour_extract_probed, read by crease.c) */
+        /** the cells whose ring edges may come from exact crossings (the
+         *  ambiguous cells, their neighbours, and both cells of each edge
+         *  listed with one crossing), as sorted wm_field_cell_key()s:
+         *  there the ring may not be what wm_contour_cell_edge()
+         *  interpolates (owned; set by wm_contour_extract_probed, read by
+         *  crease.c) */
         uint64_t *rebuilt;
         size_t nrebuilt;
         /* scratch of a query (owned): per polygon slot, and growable lists */
