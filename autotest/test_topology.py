@@ -28,7 +28,7 @@ Asserted for issue 12 (sub-pixel topology, docs/architecture.md 4a):
   - SIMPLIFY=0: no lake or island ring under 2 px lost;
   - SIMPLIFY=0: boundary Hausdorff <= 0.5 px on every scene (measured
     0.48 px at worst here, 0.50 px on 6,000 held-out scenes, seeds
-    94000-94999, and 0.48 px on 19,800 more at seven other scales, with
+    94000-94999, and 0.48 px on 21,000 more at seven other scales, with
     nothing lost; bench/topology.py).
 Recorded (printed with pytest -s and in autotest/oracle_report.txt): the
 Hausdorff distance and its 99th percentile (px), the ring count difference
