@@ -88,6 +88,20 @@ int wm_push(void **buf, size_t *n, size_t *cap, const void *item, size_t elem)
     return 1;
 }
 
+size_t wm_lower_u64(const uint64_t *a, size_t n, uint64_t key)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi)
+    {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (a[mid] < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
 wm_status wm_rings_push_grow(wm_rings *r, wm_pt p)
 {
     if (!wm_grow((void **)&r->pts, &r->pts_cap, r->npts + 1, sizeof *r->pts))

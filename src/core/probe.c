@@ -806,14 +806,6 @@ void wm_probe_free(wm_probe *p)
 int wm_probe_rebuilt(const wm_probe *p, const wm_field *f, int32_t c, int32_t r)
 {
     const uint64_t key = wm_field_cell_key(f, c, r);
-    size_t lo = 0, hi = p->nrebuilt;
-    while (lo < hi)
-    {
-        const size_t mid = lo + (hi - lo) / 2;
-        if (p->rebuilt[mid] < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
+    const size_t lo = wm_lower_u64(p->rebuilt, p->nrebuilt, key);
     return lo < p->nrebuilt && p->rebuilt[lo] == key;
 }

@@ -86,21 +86,6 @@ static uint64_t edge_id(int32_t n, int32_t c, int32_t r, int vertical)
            (uint64_t)vertical;
 }
 
-/* The first index of sorted a[0 .. n) holding a key >= key. */
-static size_t lower_u64(const uint64_t *a, size_t n, uint64_t key)
-{
-    size_t lo = 0, hi = n;
-    while (lo < hi)
-    {
-        const size_t mid = lo + (hi - lo) / 2;
-        if (a[mid] < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
-}
-
 static int cmp_u64(const void *a, const void *b)
 {
     const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
@@ -999,7 +984,7 @@ int wm_hidden_is_cell(const wm_hidden *h, const wm_field *f, int32_t c,
     if (h->ncell == 0 || c < 0 || r < 0 || c >= n || r >= n)
         return 0;
     const uint64_t key = wm_field_cell_key(f, c, r);
-    const size_t lo = lower_u64(h->cell, h->ncell, key);
+    const size_t lo = wm_lower_u64(h->cell, h->ncell, key);
     return lo < h->ncell && h->cell[lo] == key;
 }
 
@@ -1388,7 +1373,7 @@ static int hidden_cell(const wm_field *f, wm_probe *probe, const wm_hidden *h,
     }
     /* the cell's seeds */
     const uint64_t key = wm_field_cell_key(f, c, r);
-    size_t lo = lower_u64(h->seedcell, h->nseed, key);
+    size_t lo = wm_lower_u64(h->seedcell, h->nseed, key);
     q.seed = h->seed ? h->seed + lo : NULL;
     while (lo < h->nseed && h->seedcell[lo] == key)
         lo++, q.nseed++;

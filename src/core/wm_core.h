@@ -138,6 +138,10 @@ extern "C"
     int wm_push(void **buf, size_t *n, size_t *cap, const void *item,
                 size_t elem);
 
+    /** The first index of ascending a[0 .. n) holding a value >= key (n
+     *  when none). */
+    size_t wm_lower_u64(const uint64_t *a, size_t n, uint64_t key);
+
     /**
      * Sets (*map)[i] = v in a map of capacity *cap whose unset entries are
      * -1, growing it as wm_grow does (the new entries unset).
