@@ -39,7 +39,7 @@ bench/topology.py prints the same figures per family over many seeds.
 import os
 
 import pytest
-from shapely.geometry import Point, Polygon
+from shapely.geometry import LineString, Point, Polygon
 
 import adversarial
 import oracle
@@ -53,7 +53,7 @@ NARROW_PX = 2.0                       # + land narrower than this (see the docst
 MESH_REL = 1e-9
 OPENCL_AREA_REL = 1e-4
 
-# seeds per family: 40 (240 scenes, ~4.5 min on 2 cores); WM_TOPOLOGY_SEEDS=N runs
+# seeds per family: 40 (280 scenes, ~2 min on 2 cores); WM_TOPOLOGY_SEEDS=N runs
 # N per family by hand (bench/topology.py prints the figures per family)
 SEEDS = range(int(os.environ.get('WM_TOPOLOGY_SEEDS', '40')))
 # held-out scenes that failed once (bench/topology.py): seeds 94000-94999,
@@ -185,11 +185,20 @@ def test_generator_feature(scene):
         assert all(abs(c / px - round(c / px)) < 1e-9 for c in m['anchor']), scene.describe
         assert w.boundary.distance(a) <= 2.0 * unit, scene.describe
         assert 0.01 - 1e-9 <= m['gap_px'] <= 1.5 + 1e-9
+    elif sub == 'grid':
+        # the exact boundary runs along or meets a block line through the
+        # anchor (a block corner), where a shore or bank lies on it
+        lines = [LineString([(a.x, a.y - B), (a.x, a.y + B)]),
+                 LineString([(a.x - B, a.y), (a.x + B, a.y)])]
+        assert any(w.boundary.intersection(ln.buffer(2.0 * unit)).length > 0
+                   for ln in lines), scene.describe
     else:  # subpixel
         assert 0.1 - 1e-9 <= m['width_px'] <= 0.8 + 1e-9
         assert any(max(p.bounds[2] - p.bounds[0], p.bounds[3] - p.bounds[1]) <= 1.3 * px
                    for p in oracle.polygons_of(w)), 'no sub-pixel lake: %s' % scene.describe
-    if scene.family == 'seam':
+    if scene.family == 'grid':
+        assert m['anchor_in_block'] == (B, B), scene.describe
+    elif scene.family == 'seam':
         x, y = m['anchor_in_block']
         d = min(abs(x - B) if m['seam'] in ('x', 'corner') else B,
                 abs(y - B) if m['seam'] in ('y', 'corner') else B)

@@ -22,8 +22,8 @@ family:
                distances (px), both directions pooled over its scenes
   >0.5px       scenes whose Hausdorff distance exceeds 0.5 px
   specks       output rings (outer / hole) whose vertices all lie within
-               0.5 px of each other (max pairwise distance), that touch no
-               side of their block, and for which the oracle has no ring of
+               0.5 px of each other (max pairwise distance), touching a side
+               of their block or not, and for which the oracle has no ring of
                the same kind within 1 px that is that small too (diameter
                <= the speck's + 1 px: what a ring within 0.5 px of it may
                measure): tiny rings the exact union does not have; not

@@ -5,6 +5,7 @@
 #include "scene_util.h"
 #include "tap.h"
 
+#include <float.h>
 #include <math.h>
 #include <string.h>
 
@@ -104,6 +105,72 @@ static size_t bits_diff(const wm_field *f)
         bad += !ok;
     }
     return bad + (k != f->mixed);
+}
+
+/* Global sample (x, y) of a field whose sample (0, 0) is org. */
+static float at(const wm_field *f, const int *org, int x, int y)
+{
+    return wm_field_at(f, x - org[0], y - org[1]);
+}
+
+/* Samples on a block line (blocks of 32 pixels) that are exactly 0: water
+ * where the water reaches into the blocks on both sides of the line, else
+ * land (the smallest positive value), the same in every block holding them,
+ * so that the block across a shore lying on its side keeps no strip. */
+static void block_lines(void)
+{
+    wm_scene s;
+    su_init(&s, 32);
+    /* lake A on [32, 64] x [32, 64], its edges on block lines; lake B on
+     * [64, 96] x [40, 56] shares a part of A's right edge (tiles) */
+    const double a[] = {32, 32, 64, 32, 64, 64, 32, 64};
+    const double b[] = {64, 40, 96, 40, 96, 56, 64, 56};
+    /* lake C with an edge along column 10, not a block line */
+    const double c[] = {10, 100, 20, 100, 20, 110, 10, 110};
+    const int four[] = {4};
+    su_lake(&s, a, four, 1);
+    su_lake(&s, b, four, 1);
+    su_lake(&s, c, four, 1);
+    /* a river whose bank lies on row 96 (centre 100, radius 4) */
+    const double r[] = {40, 100, 90, 100};
+    su_river(&s, r, 2, 4);
+    su_finish(&s);
+    wm_field f[4]; /* blocks (0, 1), (1, 1), (1, 2), (2, 1) */
+    const int org[4][2] = {{0, 32}, {32, 32}, {32, 64}, {64, 32}};
+    for (int k = 0; k < 4; k++)
+        TAP_EQ(wm_field_compute(&s, org[k][0], org[k][1], 33, 33, NULL, &f[k],
+                                NULL),
+               WM_OK, "block (%d, %d)", org[k][0] / 32, org[k][1] / 32);
+    TAP_OK(at(&f[0], org[0], 32, 48) == FLT_MIN &&
+               at(&f[1], org[1], 32, 48) == FLT_MIN,
+           "a shore on a block side (water on one side): land in both blocks");
+    TAP_OK(at(&f[1], org[1], 32, 32) == FLT_MIN &&
+               at(&f[1], org[1], 48, 32) == FLT_MIN,
+           "the lake's corner on a block corner and its bottom edge: land");
+    TAP_OK(at(&f[1], org[1], 64, 48) == 0.0f &&
+               at(&f[3], org[3], 64, 48) == 0.0f,
+           "an edge two lakes share along a block side: water");
+    TAP_OK(at(&f[1], org[1], 64, 36) == FLT_MIN &&
+               at(&f[3], org[3], 64, 60) == FLT_MIN,
+           "beyond the shared part of that side: land");
+    TAP_OK(at(&f[1], org[1], 64, 40) == 0.0f &&
+               at(&f[1], org[1], 64, 39) == FLT_MIN,
+           "the shared part's end (B's corner) water, below it land");
+    TAP_OK(at(&f[2], org[2], 50, 96) == FLT_MIN,
+           "a river's bank along a block side (radius 4, centre 4 away): land");
+    TAP_OK(at(&f[1], org[1], 50, 63) < 0 && at(&f[1], org[1], 63, 50) < 0,
+           "the lake's samples beside its sides: water");
+    wm_field g;
+    TAP_EQ(wm_field_compute(&s, 0, 96, 33, 33, NULL, &g, NULL), WM_OK,
+           "block (0, 3)");
+    TAP_OK(wm_field_at(&g, 10, 5) == 0.0f,
+           "a shore along a column inside a block stays water (0)");
+    TAP_EQ(fc_shared_column_diff(&f[1], &f[3], 32), 0,
+           "the shared side bit-identical in both blocks");
+    wm_field_free(&g);
+    for (int k = 0; k < 4; k++)
+        wm_field_free(&f[k]);
+    wm_scene_free(&s);
 }
 
 int main(void)
@@ -248,6 +315,7 @@ int main(void)
         wm_field_free(&g);
         wm_scene_free(&n);
     }
+    block_lines();
     wm_scene_free(&s);
     return TAP_DONE();
 }

@@ -7,8 +7,8 @@
  * share taken once), for a lake edge the edge. Their pairwise
  * intersections (primitives bucketed in a grid of 16-pixel cells; pairs
  * from the same input item, or with a circle and boxes apart, skipped) are
- * kept when strictly inside the block (within a unit of its square: one
- * unit inside it) and near the boundary (the nearest
+ * kept when in the block square (on it or within a unit of it: one unit
+ * inside it) and near the boundary (the nearest
  * sample within 0.75 pixel of it: the field is 1-Lipschitz, so a point of
  * the boundary is within 0.71 pixel of a sample valued within 0.71 pixel
  * of 0; anything else is buried under another input).
@@ -362,12 +362,13 @@ static int pair_hits(finder *cf, uint32_t i, uint32_t j, int64_t cx, int64_t cy)
         if (floor(hit[h].x / PC) != (double)cx ||
             floor(hit[h].y / PC) != (double)cy)
             continue;
-        if (!(hit[h].x > 0 && hit[h].x < cf->S && hit[h].y > 0 &&
-              hit[h].y < cf->S))
-            continue; /* strictly inside the block */
-        /* one within a unit of the block square is kept one unit inside
-         * it (a wedge's tip 0.4 unit off the square is a corner of this
-         * block alone) */
+        if (!(hit[h].x >= 0 && hit[h].x <= cf->S && hit[h].y >= 0 &&
+              hit[h].y <= cf->S))
+            continue; /* in the block */
+        /* one on the block square or within a unit of it is kept one unit
+         * inside it (a wedge's tip 0.4 unit off the square is a corner of
+         * this block alone; a lake's corner on a block corner is where the
+         * block lines' land samples put it, field.c) */
         const double lo = 1, hi = cf->S - 1;
         const hit_pt c = {{round_pos(fmin(fmax(hit[h].x, lo), hi)),
                            round_pos(fmin(fmax(hit[h].y, lo), hi))},

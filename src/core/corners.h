@@ -16,7 +16,7 @@ extern "C"
     /**
      * Finds once, into probe->corner, the candidate corners of the block's
      * union boundary: the crossings of two input boundaries (river banks
-     * and end circles, lake edges) strictly inside the block, whose nearest
+     * and end circles, lake edges) in the block square, whose nearest
      * sample of f is within 0.75 pixel of the boundary, snapped to the
      * lattice (and, within a unit of the block square, one unit inside
      * it), sorted and distinct. Some are buried under a third input.

@@ -39,6 +39,7 @@
  */
 #include "field.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,6 +86,9 @@ typedef struct
     uint8_t *base;
     size_t *tog_start;
     int32_t *tog;
+    wm_lake_bands lakes; /* the window's polygons by bands of rows, built
+                            when a sample on a block line is 0 (lakes.s
+                            NULL until then) */
 } work;
 
 /* Tile index range touched by the closed box [a, b] (lattice, x or y). */
@@ -979,6 +983,101 @@ static size_t candidates(work *wk, uint8_t *haspoly, size_t *cand)
     return ncand;
 }
 
+/* Whether global lattice point (X, Y), within a lattice unit of a sample
+ * of window tile t, is water in the closed union: in a capsule (the
+ * field's |p - seg| - r <= 0), on a lake edge, or inside a lake by the
+ * ray rule (exact). Every item holding it is in the tile's lists, and no
+ * polygon without an edge there holds it (the tile would be uniform). */
+static int water_at(const work *w, size_t t, int64_t X, int64_t Y)
+{
+    const wm_scene *s = w->s;
+    for (size_t i = w->tseg_start[t]; i < w->tseg_start[t + 1]; i++)
+    {
+        const wm_river_seg *g = &s->segs[w->tseg[i]];
+        const double abx = (double)(g->bx - g->ax),
+                     aby = (double)(g->by - g->ay);
+        const double len2 = abx * abx + aby * aby;
+        const double d2 = seg_d2((double)(X - g->ax), (double)(Y - g->ay), abx,
+                                 aby, len2 > 0 ? 1.0 / len2 : 0.0);
+        if (sqrt(d2) - g->r <= 0)
+            return 1;
+    }
+    for (size_t i = w->tedge_start[t]; i < w->tedge_start[t + 1]; i++)
+        if (wm_edge_holds(&s->edges[w->tedge[i]], X, Y) ||
+            wm_lake_bands_inside(&w->lakes, w->tedge_poly[i], X, Y))
+            return 1;
+    return 0;
+}
+
+/* Whether the water at sample (X, Y) of a block line (vertical: a side
+ * between blocks left and right of it; horizontal: below and above),
+ * whose value is 0, reaches into the blocks on both sides: the points a
+ * lattice unit beside it across each line it lies on are water. */
+static int water_across(const work *w, size_t t, int64_t X, int64_t Y,
+                        int vertical, int horizontal)
+{
+    return (!vertical ||
+            (water_at(w, t, X - 1, Y) && water_at(w, t, X + 1, Y))) &&
+           (!horizontal ||
+            (water_at(w, t, X, Y - 1) && water_at(w, t, X, Y + 1)));
+}
+
+/* First index i >= 0 with (g0 + i) a multiple of n. */
+static int32_t first_line(int64_t g0, int32_t n)
+{
+    return (int32_t)((n - g0 % n) % n);
+}
+
+/* Samples on a block line (a global row or column that is a multiple of
+ * the block's n) whose value is exactly 0 lie on a lake edge or a bank.
+ * Water is closed, so such a sample is water, which is right inside a
+ * block (a boundary through samples moves by a lattice unit) but not on a
+ * block side where the water lies on one side only: the block across
+ * would keep a strip one unit thick along its side (a speck at a corner)
+ * that the union does not have. Such a sample is land: the smallest
+ * positive value, for every block that holds it (a pure function of the
+ * global data, invariant 2), so the water's own block stops a unit short
+ * of the side and the block across has none; the two still agree on the
+ * side. Where water lies on both sides (two lake polygons sharing an edge
+ * along the side), it stays water and the union stays seamless. */
+static wm_status settle_lines(work *w, size_t t, float *val)
+{
+    const wm_field *f = w->f;
+    const int32_t n = w->s->n;
+    const int64_t gx = f->gx0 + (int64_t)(t % (size_t)f->ntx) * WM_TILE;
+    const int64_t gy = f->gy0 + (int64_t)(t / (size_t)f->ntx) * WM_TILE;
+    const int32_t nx =
+        (int32_t)(gx - f->gx0 + WM_TILE < f->w - 1 ? WM_TILE
+                                                   : f->w - 1 - (gx - f->gx0)) +
+        1;
+    const int32_t ny =
+        (int32_t)(gy - f->gy0 + WM_TILE < f->h - 1 ? WM_TILE
+                                                   : f->h - 1 - (gy - f->gy0)) +
+        1;
+    /* the columns on vertical lines (every row), then the rows on
+     * horizontal ones (the other columns) */
+    for (int pass = 0; pass < 2; pass++)
+        for (int32_t l = first_line(pass ? gy : gx, n); l < (pass ? ny : nx);
+             l += n)
+            for (int32_t k = 0; k < (pass ? nx : ny); k++)
+            {
+                const int32_t i = pass ? k : l, j = pass ? l : k;
+                const int vertical = (gx + i) % n == 0;
+                const int horizontal = (gy + j) % n == 0;
+                float *v = &val[j * TS1 + i];
+                if (*v != 0.0f || (pass && vertical))
+                    continue;
+                if (!w->lakes.s && w->npolys &&
+                    wm_lake_bands_build(&w->lakes, w->s, w->polys, w->npolys) !=
+                        WM_OK)
+                    return WM_ERR_NOMEM;
+                if (!water_across(w, t, (gx + i) * WM_Q, (gy + j) * WM_Q,
+                                  vertical, horizontal))
+                    *v = FLT_MIN;
+            }
+    return WM_OK;
+}
+
 /* Evaluates the candidate tiles in batches (on dev, or the C path)
  * straight into the field's slabs, keeping the mixed ones (store_tile packs
  * them down over the uniform ones). */
@@ -1036,6 +1135,11 @@ static wm_status eval_batches(work *wk, const wm_field_device *dev,
                  : wm_field_eval_c(NULL, &b, ctx);
         if (st != WM_OK)
             break;
+        for (size_t k = 0; st == WM_OK && k < n; k++)
+            if (settle_lines(wk, cand[c0 + k], top + k * TS1 * TS1) != WM_OK)
+                st = field_nomem(ctx);
+        if (st != WM_OK)
+            break;
         float *next = top;
         for (size_t k = 0; k < n; k++)
             store_tile(wk, cand[c0 + k], top + k * TS1 * TS1, &next);
@@ -1062,6 +1166,7 @@ static void work_free(work *wk)
     free(wk->base);
     free(wk->tog_start);
     free(wk->tog);
+    wm_lake_bands_free(&wk->lakes);
 }
 
 wm_status wm_field_compute(const wm_scene *s, int64_t gx0, int64_t gy0,

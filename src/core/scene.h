@@ -60,6 +60,18 @@ extern "C"
         return g->by > g->ay ? l > r : l < r;
     }
 
+    /** Whether global lattice point (X, Y) lies on lake edge g (exact in
+     *  __int128): its distance is 0 there, and a lake's boundary is water. */
+    static inline int wm_edge_holds(const wm_lake_edge *g, int64_t X, int64_t Y)
+    {
+        const wm_i128 ux = g->bx - g->ax, uy = g->by - g->ay;
+        const wm_i128 px = X - g->ax, py = Y - g->ay;
+        if (ux * py != uy * px)
+            return 0;
+        const wm_i128 dot = ux * px + uy * py;
+        return dot >= 0 && dot <= ux * ux + uy * uy;
+    }
+
     /** An axis-aligned box in global lattice units, inclusive. */
     typedef struct
     {
