@@ -38,6 +38,11 @@ interest" whose exact shape the lattice cannot resolve by sampling alone:
             (sometimes with a lake touching it from across), a triangle
             whose apex lies on a block corner or side; two times in five a
             river passing by. Rotated by quarter turns.
+  mosaic    a lake of diameter 12-40 m cut along one or two lines into
+            pieces that share their edges inside the union (riverbank
+            polygons, tiled lakes), or one time in four lie 0.01-1.5 px
+            apart (a land strip); one to three rivers (0.5-6 m) cross it,
+            some ending inside.
   seam      one of the four above with its feature of interest moved onto a
             block side (or, one time in five, a block corner): exactly on it
             one time in four, else within +-0.4 of the feature's size (at
@@ -84,7 +89,7 @@ EPSG = scenes.SCENE_EPSG  # 32631
 ORIGIN = (400000.0, 4699968.0)
 
 BASE_FAMILIES = ('wedge', 'parallel', 'island', 'subpixel')
-FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid')
+FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic')
 
 
 # ----------------------------------------------------------------------------
@@ -405,8 +410,43 @@ def _grid(rng, px, B):
     return rivers, lakes, meta
 
 
+def _mosaic(rng, px):
+    """A lake cut into pieces along one or two lines (riverbank polygons
+    of OpenStreetMap, lakes tiled by a survey): the pieces share their
+    edges inside the union, or one time in four lie a gap of 0.01-1.5 px
+    apart (a land strip); one to three rivers cross it, some ending inside."""
+    from shapely.geometry import LineString as _Line
+    from shapely.geometry import Polygon as _Poly
+    from shapely.ops import split
+    d = rng.uniform(12.0, 40.0)
+    pieces = [_Poly(_ngon(rng, 0.0, 0.0, d, rng.randint(5, 12), rough=0.2))]
+    for _ in range(rng.choice((1, 1, 2))):
+        a = rng.uniform(0.0, math.pi)
+        off = rng.uniform(-0.2, 0.2) * d
+        n, u = (-math.sin(a), math.cos(a)), (d * math.cos(a), d * math.sin(a))
+        cut = _Line([(off * n[0] - u[0], off * n[1] - u[1]),
+                     (off * n[0] + u[0], off * n[1] + u[1])])
+        pieces = [q for p in pieces for q in split(p, cut).geoms]
+    gap = _log_uniform(rng, 0.01, 1.5) * px if rng.random() < 0.25 else 0.0
+    if gap:
+        pieces = [p.buffer(-gap / 2.0, join_style=2) for p in pieces]
+        pieces = [q for p in pieces for q in getattr(p, 'geoms', [p]) if not q.is_empty]
+    lakes = [(list(p.exterior.coords), []) for p in pieces]
+    rivers = []
+    for _ in range(rng.randint(1, 3)):
+        a = rng.uniform(0.0, math.pi)
+        off = rng.uniform(-0.35, 0.35) * d
+        n, u = (-math.sin(a), math.cos(a)), (math.cos(a), math.sin(a))
+        t0 = -d if rng.random() < 0.7 else rng.uniform(-0.3, 0.3) * d
+        rivers.append(([(off * n[0] + t0 * u[0], off * n[1] + t0 * u[1]),
+                        (off * n[0] + d * u[0], off * n[1] + d * u[1])],
+                       rng.uniform(0.5, 6.0)))
+    meta = dict(pieces=len(pieces), gap_px=gap / px, diameter_m=d, scale=px)
+    return rivers, lakes, meta
+
+
 _GENERATORS = {'wedge': _wedge, 'parallel': _parallel, 'island': _island,
-               'subpixel': _subpixel, 'shore': _shore}
+               'subpixel': _subpixel, 'shore': _shore, 'mosaic': _mosaic}
 
 
 # ----------------------------------------------------------------------------
