@@ -43,6 +43,11 @@ interest" whose exact shape the lattice cannot resolve by sampling alone:
             polygons, tiled lakes), or one time in four lie 0.01-1.5 px
             apart (a land strip); one to three rivers (0.5-6 m) cross it,
             some ending inside.
+  twins     inputs that coincide: a lake given twice, a lake with a hole
+            and a lake filling it, a river given twice (once reversed), a
+            river whose bank or centre line runs along a lake edge, a river
+            that loops with a repeated vertex; two times in three a river
+            crossing.
   seam      one of the four above with its feature of interest moved onto a
             block side (or, one time in five, a block corner): exactly on it
             one time in four, else within +-0.4 of the feature's size (at
@@ -89,7 +94,7 @@ EPSG = scenes.SCENE_EPSG  # 32631
 ORIGIN = (400000.0, 4699968.0)
 
 BASE_FAMILIES = ('wedge', 'parallel', 'island', 'subpixel')
-FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic')
+FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic', 'twins')
 
 
 # ----------------------------------------------------------------------------
@@ -445,8 +450,51 @@ def _mosaic(rng, px):
     return rivers, lakes, meta
 
 
+def _twins(rng, px):
+    """Inputs that coincide: a lake given twice, a lake with a hole and a
+    lake filling it, a river given twice (once reversed), a river whose
+    bank runs along a lake edge, a river that loops and repeats vertices;
+    with a river crossing two times in three."""
+    kind = rng.choice(('lake2', 'hole', 'river2', 'bank', 'loop'))
+    d = rng.uniform(10.0, 30.0)
+    shell = _ngon(rng, 0.0, 0.0, d, rng.randint(4, 9), rough=0.2)
+    rivers, lakes = [], []
+    w = rng.uniform(0.5, 5.0)
+    if kind == 'lake2':
+        lakes = [(shell, []), (list(reversed(shell)), [])]
+    elif kind == 'hole':
+        hole = _ngon(rng, rng.uniform(-0.1, 0.1) * d, rng.uniform(-0.1, 0.1) * d,
+                     rng.uniform(0.2, 0.5) * d, rng.randint(3, 7), rough=0.2)
+        lakes = [(shell, [hole]), (list(reversed(hole)) if rng.random() < 0.5 else hole, [])]
+    elif kind == 'river2':
+        line = [(-d, rng.uniform(-3, 3)), (0.0, 0.0), (d, rng.uniform(-3, 3))]
+        rivers = [(line, w), (list(reversed(line)), w)]
+        lakes = [([(x + d * 0.8, y) for x, y in shell], [])]
+    elif kind == 'bank':
+        i = rng.randrange(len(shell) - 1)
+        (ax, ay), (bx, by) = shell[i], shell[i + 1]
+        L = math.hypot(bx - ax, by - ay)
+        n = ((by - ay) / L, -(bx - ax) / L)  # outward for a ccw ring
+        off = rng.choice((w / 2.0, 0.0, -w / 2.0))
+        rivers = [([(ax + off * n[0], ay + off * n[1]), (bx + off * n[0], by + off * n[1])], w)]
+        lakes = [(shell, [])]
+    else:
+        r0 = rng.uniform(0.3, 0.45) * d
+        pts = [(r0 * math.cos(t), r0 * math.sin(t)) for t in
+               (2 * math.pi * k / 7 for k in range(8))]
+        pts = pts[:3] + [pts[2]] + pts[3:] + [pts[1]]  # a repeated vertex, a lap
+        rivers = [(pts, w)]
+        lakes = [([(x + d, y) for x, y in shell], [])]
+    if rng.random() < 2.0 / 3.0:
+        a = rng.uniform(0.0, math.pi)
+        rivers.append(([(-d * math.cos(a), -d * math.sin(a)), (d * math.cos(a), d * math.sin(a))],
+                       rng.uniform(0.5, 6.0)))
+    return rivers, lakes, dict(kind=kind, width_m=w, scale=px)
+
+
 _GENERATORS = {'wedge': _wedge, 'parallel': _parallel, 'island': _island,
-               'subpixel': _subpixel, 'shore': _shore, 'mosaic': _mosaic}
+               'subpixel': _subpixel, 'shore': _shore, 'mosaic': _mosaic,
+               'twins': _twins}
 
 
 # ----------------------------------------------------------------------------
