@@ -69,10 +69,14 @@ SEEDS = range(int(os.environ.get('WM_TOPOLOGY_SEEDS', '40')))
 # one then also out of reach of its 4 nearest edges, the far banks of both
 # arms (0.64 px); at 0.25:32 (seeds 100000-100499) a lake 0.18 px wide
 # touching a sample row at its vertex, lost where a dividing segment ended
-# there (4 px)
+# there (4 px); a spike along an edge two lake pieces share (mosaic seed
+# 116135, 1.01 px); at 0.25:32 the thin tip of one of four lake pieces
+# meeting at a point taken for land, two specks 5 m inside the lake (mosaic
+# seed 119073, 20 px). (The seam scenes at other block sizes lie on real
+# seams since the family's origin is a corner of that block grid.)
 REGRESSIONS = ['shore-94103', 'island-94499', 'island-94036', 'seam-98214@1:128',
                'island-99111', 'wedge-101159@2:256', 'seam-101080@2:256',
-               'subpixel-100273@0.25:32']
+               'subpixel-100273@0.25:32', 'mosaic-116135', 'mosaic-119073@0.25:32']
 SCENE_IDS = ['%s-%d' % (f, s) for f in adversarial.FAMILIES for s in SEEDS] + REGRESSIONS
 
 RUNS = {  # name: extra open options (METHOD=CONTOUR is the default)

@@ -891,6 +891,17 @@ static int index_room(wm_field *f, size_t n, size_t *cap)
     return 1;
 }
 
+/* Window tile t's first sample (c0, r0) and how many of its samples lie
+ * inside the window, nx x ny. */
+static void tile_extent(const wm_field *f, size_t t, int32_t *c0, int32_t *r0,
+                        int32_t *nx, int32_t *ny)
+{
+    *c0 = (int32_t)(t % (size_t)f->ntx) * WM_TILE;
+    *r0 = (int32_t)(t / (size_t)f->ntx) * WM_TILE;
+    *nx = (*c0 + WM_TILE < f->w - 1 ? WM_TILE : f->w - 1 - *c0) + 1;
+    *ny = (*r0 + WM_TILE < f->h - 1 ? WM_TILE : f->h - 1 - *r0) + 1;
+}
+
 /* Keeps the evaluated tile k of a batch as window tile t: uniform when
  * every sample inside the window is +band or -band, else its values, moved
  * to *dst (the next free tile of the slab; advanced). */
@@ -898,10 +909,8 @@ static void store_tile(work *w, size_t t, float *val, float **dst)
 {
     wm_field *f = w->f;
     const float band = (float)w->s->band;
-    const int32_t c0 = (int32_t)(t % (size_t)f->ntx) * WM_TILE;
-    const int32_t r0 = (int32_t)(t / (size_t)f->ntx) * WM_TILE;
-    const int32_t nx = (c0 + WM_TILE < f->w - 1 ? WM_TILE : f->w - 1 - c0) + 1;
-    const int32_t ny = (r0 + WM_TILE < f->h - 1 ? WM_TILE : f->h - 1 - r0) + 1;
+    int32_t c0, r0, nx, ny;
+    tile_extent(f, t, &c0, &r0, &nx, &ny);
     int all_land = 1, all_water = 1;
     for (int32_t j = 0; j < ny && (all_land || all_water); j++)
         for (int32_t q = 0; q < nx; q++)
@@ -1044,16 +1053,9 @@ static wm_status settle_lines(work *w, size_t t, float *val)
 {
     const wm_field *f = w->f;
     const int32_t n = w->s->n;
-    const int64_t gx = f->gx0 + (int64_t)(t % (size_t)f->ntx) * WM_TILE;
-    const int64_t gy = f->gy0 + (int64_t)(t / (size_t)f->ntx) * WM_TILE;
-    const int32_t nx =
-        (int32_t)(gx - f->gx0 + WM_TILE < f->w - 1 ? WM_TILE
-                                                   : f->w - 1 - (gx - f->gx0)) +
-        1;
-    const int32_t ny =
-        (int32_t)(gy - f->gy0 + WM_TILE < f->h - 1 ? WM_TILE
-                                                   : f->h - 1 - (gy - f->gy0)) +
-        1;
+    int32_t c0, r0, nx, ny;
+    tile_extent(f, t, &c0, &r0, &nx, &ny);
+    const int64_t gx = f->gx0 + c0, gy = f->gy0 + r0;
     /* the columns on vertical lines (every row), then the rows on
      * horizontal ones (the other columns) */
     for (int pass = 0; pass < 2; pass++)

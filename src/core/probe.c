@@ -545,12 +545,19 @@ static int lake_intervals(wm_probe *in, wm_pt P, int vertical, int32_t L,
                  * lattice point toggles there, and the rule's class of a
                  * point of an edge may be either: an island 0.1 pixel wide
                  * in a lake was lost so); the last piece's may be the
-                 * segment's end; a piece with none is too thin to tell
-                 * and keeps the class before it */
+                 * segment's end; a piece with none, narrower than a unit,
+                 * takes the other class than the piece before it, across
+                 * the edge crossing the segment there (a lake cut into
+                 * pieces meeting at a point at a small angle: the thin tip
+                 * of one between the others was land), but after an edge
+                 * through P (t = 0), where the class of P may be either,
+                 * keeps it */
                 double c = ceil(from), f = floor(to);
                 c += c == from; /* from is a toggle */
                 f -= i < j1 && f == to;
-                if (c <= f && c >= 0 && f <= L)
+                if (!(c <= f && c >= 0 && f <= L))
+                    odd ^= from > 0;
+                else
                 {
                     const double t = floor((c + f) / 2);
                     const double x = P.x + (vertical ? 0 : t);
