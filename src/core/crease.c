@@ -108,12 +108,12 @@ static int follows_boundary(wm_probe *in, wm_pt a, wm_pt c, wm_pt b)
      * inside the union (Andorra at 1 m pixels, 3.4 pixels). */
     const double mx = ((double)a.x + b.x) / 2.0, my = ((double)a.y + b.y) / 2.0;
     static const double along[] = {0.25, 1.0 / 3.0, 0.5, 0.75};
+    const int land = wm_orient(a, b, c) > 0;
     for (int k = 0; k < 4; k++)
     {
         const double x = mx + along[k] * (c.x - mx),
                      y = my + along[k] * (c.y - my);
-        if ((wm_probe_distance(in, x, y, reach) > 0) !=
-            (wm_orient(a, b, c) > 0))
+        if ((wm_probe_distance(in, x, y, reach) > 0) != land)
             return 0;
     }
     for (int e = 0; e < 2; e++)
