@@ -53,9 +53,11 @@ interest" whose exact shape the lattice cannot resolve by sampling alone:
             one time in four, else within +-0.4 of the feature's size (at
             least +-0.5 px) of it.
 
-Outside the seam family the feature of interest lies inside block (0, 0) of
-the scene (origin ORIGIN, a corner of the global 64 m block grid), at least
-12 m from its sides; long rivers still cross other blocks.
+Outside the seam and grid families the feature of interest lies inside
+block (0, 0) of the scene (origin ORIGIN, a corner of the global 64 m block
+grid), at least 12 m from its sides; long rivers still cross other blocks.
+The grid family's lies on a block corner, the seam family's on a side or a
+corner of the grid of its own block size.
 
 All vertex coordinates are snapped to the driver's lattice (PIXEL_SIZE /
 256, exactly representable in binary), so the driver and the GEOS oracle see

@@ -1011,9 +1011,13 @@ static int water_at(const work *w, size_t t, int64_t X, int64_t Y)
         if (sqrt(d2) - g->r <= 0)
             return 1;
     }
-    for (size_t i = w->tedge_start[t]; i < w->tedge_start[t + 1]; i++)
+    /* the tile's edges come polygon by polygon (bin_items): each
+     * polygon's inside test once, at its first edge */
+    const size_t e0 = w->tedge_start[t], e1 = w->tedge_start[t + 1];
+    for (size_t i = e0; i < e1; i++)
         if (wm_edge_holds(&s->edges[w->tedge[i]], X, Y) ||
-            wm_lake_bands_inside(&w->lakes, w->tedge_poly[i], X, Y))
+            ((i == e0 || w->tedge_poly[i] != w->tedge_poly[i - 1]) &&
+             wm_lake_bands_inside(&w->lakes, w->tedge_poly[i], X, Y)))
             return 1;
     return 0;
 }
