@@ -20,7 +20,7 @@ from collections import defaultdict, namedtuple
 import numpy as np
 from osgeo import ogr, osr
 from shapely import wkb as shapely_wkb
-from shapely.geometry import (GeometryCollection, MultiPolygon,
+from shapely.geometry import (GeometryCollection, LineString, MultiPolygon,
                               Polygon, box)
 from shapely.ops import unary_union
 from shapely.prepared import prep
@@ -262,10 +262,23 @@ def _polygonal(g):
     return []
 
 
-def buffer_river(line, width):
+def _buffer(geom, r):
     if SHAPELY2:
-        return line.buffer(width / 2.0, quad_segs=QUAD_SEGS)
-    return line.buffer(width / 2.0, resolution=QUAD_SEGS)
+        return geom.buffer(r, quad_segs=QUAD_SEGS)
+    return geom.buffer(r, resolution=QUAD_SEGS)
+
+
+def buffer_river(line, width):
+    """The river's water: its line grown by width / 2. A line that is not
+    simple is grown segment by segment and dissolved (the definition):
+    GEOS 3.11 buffers a line that loops and runs over its first segment
+    again as a filled disc, the land inside the loop lost (twins seed
+    126099 at 0.5 m: 458 m² instead of 277 m²)."""
+    if line.is_simple:
+        return _buffer(line, width / 2.0)
+    c = list(line.coords)
+    return unary_union([_buffer(LineString(c[i:i + 2]), width / 2.0)
+                        for i in range(len(c) - 1)])
 
 
 def water(inputs):

@@ -173,6 +173,30 @@ static void block_lines(void)
     wm_scene_free(&s);
 }
 
+/* Two lakes touching along one edge at a block corner, a quadrant dry:
+ * the corner sample is land, though the points a unit across both lines
+ * are water (the edges are closed), so the dry block keeps no speck. */
+static void block_corner(void)
+{
+    wm_scene s;
+    su_init(&s, 32);
+    const double below[] = {20, 10, 44, 10, 44, 32, 20, 32};
+    const double left[] = {20, 32, 32, 32, 32, 40, 20, 40};
+    const int four[] = {4};
+    su_lake(&s, below, four, 1);
+    su_lake(&s, left, four, 1);
+    su_finish(&s);
+    wm_field f;
+    TAP_EQ(wm_field_compute(&s, 32, 32, 33, 33, NULL, &f, NULL), WM_OK,
+           "block (1, 1)");
+    TAP_OK(wm_field_at(&f, 0, 0) == FLT_MIN,
+           "a block corner two lakes touch with the block dry: land");
+    TAP_OK(wm_field_at(&f, 5, 0) == FLT_MIN && wm_field_at(&f, 0, 5) == FLT_MIN,
+           "the lakes' edges along its sides: land");
+    wm_field_free(&f);
+    wm_scene_free(&s);
+}
+
 int main(void)
 {
     wm_scene s;
@@ -316,6 +340,7 @@ int main(void)
         wm_scene_free(&n);
     }
     block_lines();
+    block_corner();
     wm_scene_free(&s);
     return TAP_DONE();
 }

@@ -47,6 +47,42 @@ static int vertex_near(const wm_rings *r, double x, double y, double d)
     return 0;
 }
 
+/* A block side along a lake's edge (lake A left of x = 32, blocks of 32
+ * px), with land of the block across touching it between two lakes there
+ * (C below y = 19.5, B above y = 20): the side's segment from y = 19 to 20
+ * is water only where the points a unit across are both, so the land
+ * stays a notch reaching the side, found alike by both blocks. */
+static void block_side(void)
+{
+    wm_scene s;
+    su_init(&s, 32);
+    const double a[] = {20, 4, 32, 4, 32, 28, 20, 28};
+    const double b[] = {32, 20, 44, 20, 44, 28, 32, 28};
+    const double c[] = {32, 4, 44, 4, 44, 19.5, 32, 19.5};
+    const int four[] = {4};
+    su_lake(&s, a, four, 1);
+    su_lake(&s, b, four, 1);
+    su_lake(&s, c, four, 1);
+    su_finish(&s);
+    for (int bx = 0; bx < 2; bx++)
+    {
+        wm_probe p;
+        TAP_EQ(wm_probe_init(&p, &s, bx, 0), WM_OK, "probe of block (%d, 0)",
+               bx);
+        int32_t off[WM_Q];
+        int cls1 = 1;
+        const int k =
+            wm_probe_crossings(&p, (wm_pt){(1 - bx) * 32 * WM_Q, 19 * WM_Q}, 1,
+                               WM_Q, 1, &cls1, off, WM_Q);
+        TAP_OK(k == 2 && off[0] == 128 && off[1] == WM_Q - 1,
+               "block (%d, 0): the side's water ends at the gap (128) and "
+               "meets B a unit before its edge (255), got %d crossings %d %d",
+               bx, k, k > 0 ? off[0] : -1, k > 1 ? off[1] : -1);
+        wm_probe_free(&p);
+    }
+    wm_scene_free(&s);
+}
+
 int main(void)
 {
     /* Two rivers 10 px wide, their banks 0.2 px apart between two sample
@@ -344,5 +380,6 @@ int main(void)
     TAP_EQ(ring_meetings(&r1), 0, "rings simple and disjoint");
     wm_rings_free(&r1);
     wm_scene_free(&s);
+    block_side();
     return TAP_DONE();
 }

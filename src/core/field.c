@@ -1024,15 +1024,20 @@ static int water_at(const work *w, size_t t, int64_t X, int64_t Y)
 
 /* Whether the water at sample (X, Y) of a block line (vertical: a side
  * between blocks left and right of it; horizontal: below and above),
- * whose value is 0, reaches into the blocks on both sides: the points a
- * lattice unit beside it across each line it lies on are water. */
+ * whose value is 0, reaches into every block holding the sample: the
+ * points a lattice unit across the line are water, or at a block corner
+ * (both) the four a unit diagonally into the four blocks (two lakes
+ * touching there along one edge leave the axis points all water and a
+ * quadrant dry). */
 static int water_across(const work *w, size_t t, int64_t X, int64_t Y,
                         int vertical, int horizontal)
 {
-    return (!vertical ||
-            (water_at(w, t, X - 1, Y) && water_at(w, t, X + 1, Y))) &&
-           (!horizontal ||
-            (water_at(w, t, X, Y - 1) && water_at(w, t, X, Y + 1)));
+    if (vertical && horizontal)
+        return water_at(w, t, X - 1, Y - 1) && water_at(w, t, X + 1, Y - 1) &&
+               water_at(w, t, X - 1, Y + 1) && water_at(w, t, X + 1, Y + 1);
+    if (vertical)
+        return water_at(w, t, X - 1, Y) && water_at(w, t, X + 1, Y);
+    return water_at(w, t, X, Y - 1) && water_at(w, t, X, Y + 1);
 }
 
 /* First index i >= 0 with (g0 + i) a multiple of n. */
@@ -1052,7 +1057,8 @@ static int32_t first_line(int64_t g0, int32_t n)
  * global data, invariant 2), so the water's own block stops a unit short
  * of the side and the block across has none; the two still agree on the
  * side. Where water lies on both sides (two lake polygons sharing an edge
- * along the side), it stays water and the union stays seamless. */
+ * along the side), it stays water and the union stays seamless
+ * (water_across; probe.c's side_rule does the same between samples). */
 static wm_status settle_lines(work *w, size_t t, float *val)
 {
     const wm_field *f = w->f;

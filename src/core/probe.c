@@ -8,14 +8,17 @@
  * by a ray crossing count), as the field defines a sample (field.c). The
  * lake edges are indexed twice: by 16-pixel cell for the distances, and by
  * band of 4 sample rows for the ray (an edge in every band its half-open y
- * range meets), so a query costs the items near the point plus the edges
- * its row crosses, never a whole lake.
+ * range meets; one band beyond each side of the block), so a query costs
+ * the items near the point plus the edges its row crosses, never a whole
+ * lake.
  * wm_probe_crossings finds the crossings of the union's boundary with an
  * axis-aligned segment exactly: the interval of the segment's line inside
  * each capsule near it (its two end discs and the rectangle between them),
  * and for each lake polygon the pieces between its edges' crossings, each
  * classed by the exact ray rule at a lattice point inside it; the union of
- * the water intervals gives the crossings.
+ * the water intervals gives the crossings. On a block side a lake edge
+ * lying along it is water only where the points a unit across are, in both
+ * blocks (side_rule), as a sample on a block line (field.c).
  * Cost: building the indexes is O(segments x cells they reach + lake edges
  * x bands they span); a query as above.
  * Robustness: a point with integer coordinates gets its ray test in exact
@@ -64,10 +67,11 @@ static int32_t dcell(const wm_probe *in, double v)
     return c < 0 ? 0 : (c > side - 1 ? side - 1 : (int32_t)c);
 }
 
-/* Band (clamped) of the ray index holding local y. */
+/* Band (clamped) of the ray index holding local y; band 0 lies below the
+ * block, and the last above it (side_rule asks a lattice unit outside). */
 static int32_t rband(const wm_probe *in, double y)
 {
-    const double c = floor(y / RBAND);
+    const double c = floor(y / RBAND) + 1;
     const int32_t side = in->lrows.side;
     return c < 0 ? 0 : (c > side - 1 ? side - 1 : (int32_t)c);
 }
@@ -137,7 +141,7 @@ static wm_status build_lake_index(wm_probe *in, int32_t S)
     if (!in->ledge || !in->lwide || !in->par || !in->dmin || !in->touched)
         return WM_ERR_NOMEM;
     wm_cells_reset(&in->lcells, S / DCELL + 1);
-    wm_cells_reset(&in->lrows, S / RBAND + 1);
+    wm_cells_reset(&in->lrows, S / RBAND + 3);
     const int32_t nb = in->lrows.side;
     for (size_t k = 0; k < in->npolys; k++)
     {
@@ -156,10 +160,10 @@ static wm_status build_lake_index(wm_probe *in, int32_t S)
             /* bands met by the half-open range [y0, y1) */
             const int64_t y0 = (g->ay < g->by ? g->ay : g->by) - in->Y0;
             const int64_t y1 = (g->ay > g->by ? g->ay : g->by) - in->Y0;
-            if (y1 <= 0 || y0 > S)
+            if (y1 <= -RBAND || y0 > S + RBAND)
                 continue;
-            int64_t b0 = wm_floordiv(y0, RBAND),
-                    b1 = wm_floordiv(y1 - 1, RBAND);
+            int64_t b0 = wm_floordiv(y0, RBAND) + 1,
+                    b1 = wm_floordiv(y1 - 1, RBAND) + 1;
             b0 = b0 < 0 ? 0 : b0;
             b1 = b1 > nb - 1 ? nb - 1 : b1;
             for (int64_t r = b0; r <= b1; r++)
@@ -303,6 +307,23 @@ static int add_interval(wm_probe *in, size_t *n, double lo, double hi,
     in->iv[2 * *n] = lo;
     in->iv[2 * *n + 1] = hi;
     (*n)++;
+    return 1;
+}
+
+/* Notes [lo, hi] clipped to [0, L], the part of a block side's segment
+ * that a lake edge lying along it covers (see side_rule). */
+static int add_side_edge(wm_probe *in, double lo, double hi, int32_t L)
+{
+    lo = lo < 0 ? 0 : lo;
+    hi = hi > L ? L : hi;
+    if (!(lo < hi))
+        return 1;
+    if (!wm_grow((void **)&in->dv, &in->dvcap, 2 * (in->ndv + 1),
+                 sizeof *in->dv))
+        return 0;
+    in->dv[2 * in->ndv] = lo;
+    in->dv[2 * in->ndv + 1] = hi;
+    in->ndv++;
     return 1;
 }
 
@@ -453,10 +474,14 @@ static int edge_cover(wm_probe *in, const wm_lake_edge *g, int64_t Gx,
         (au < 0 && bu < 0))
         return 0;
     if (aw == 0 && bw == 0) /* along the line */
-        return add_interval(in, niv, (double)(au < bu ? au : bu),
-                            (double)(au > bu ? au : bu), L)
-                   ? (au <= 0 && bu >= 0) || (bu <= 0 && au >= 0)
-                   : -1;
+    {
+        const double lo = (double)(au < bu ? au : bu);
+        const double hi = (double)(au > bu ? au : bu);
+        if (!add_interval(in, niv, lo, hi, L) ||
+            (in->side && !add_side_edge(in, lo, hi, L)))
+            return -1;
+        return (au <= 0 && bu >= 0) || (bu <= 0 && au >= 0);
+    }
     int at_p = 0;
     for (int64_t t = 0; t <= L; t += L) /* through an end */
         if ((wm_i128)(bu - au) * (0 - aw) == (wm_i128)(bw - aw) * (t - au))
@@ -671,18 +696,20 @@ static int round_crossings(const double *iv, size_t niv, int32_t L, int cls0,
     return n;
 }
 
-int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
-                       int *cls1, int32_t *off, int max)
+/* Appends to in->iv (*niv) the intervals of the river capsules meeting
+ * the segment (those of its midpoint's cell: any capsule meeting it is
+ * within half of it from the midpoint, so registered); *inside is set
+ * when a bank meets the segment, ends included. Returns 0 when the
+ * segment lies in one capsule and cls0 (water) and *cls1 agree (the
+ * crossings are known: none), -1 when out of memory, else 1. */
+static int river_intervals(wm_probe *in, int64_t Gx, int64_t Gy, wm_pt P,
+                           int vertical, int32_t L, int cls0, int cls1,
+                           size_t *niv, int *inside)
 {
     const wm_scene *s = in->s;
-    const int64_t Gx = (int64_t)P.x + in->X0, Gy = (int64_t)P.y + in->Y0;
-    size_t niv = 0;
-    /* rivers: the capsules of the midpoint's cell (any capsule meeting the
-     * segment is within half of it from the midpoint, so registered) */
     const double mx = P.x + (vertical ? 0 : L / 2.0);
     const double my = P.y + (vertical ? L / 2.0 : 0);
     size_t c0, c1;
-    int inside = 0; /* an input's boundary meets the segment, ends included */
     const int32_t cx = dcell(in, mx), cy = dcell(in, my);
     wm_cells_row(&in->cells, cy, cx, cx, &c0, &c1);
     const size_t n0 = c1 - c0;
@@ -702,16 +729,197 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
             continue;
         if (!capsule_interval(g, Gx, Gy, vertical, &lo, &hi))
             continue;
-        if (lo <= 0 && hi >= L && cls0 && *cls1 == cls0)
+        if (lo <= 0 && hi >= L && cls0 && cls1 == cls0)
             return 0; /* water ends, the segment inside one capsule */
         /* a bank through an end sample counts: the end's class may be
          * water only by that bank (distance 0), the land beside it found
          * below (two rivers whose banks lie on sample rows) */
-        inside |= (lo >= 0 && lo <= L) || (hi >= 0 && hi <= L);
-        if (!add_interval(in, &niv, lo, hi, L))
+        *inside |= (lo >= 0 && lo <= L) || (hi >= 0 && hi <= L);
+        if (!add_interval(in, niv, lo, hi, L))
             return -1;
     }
+    return 1;
+}
+
+/* The water intervals of the segment, every input's, sorted into in->iv
+ * (*niv); 0 when out of memory. */
+static int seg_water(wm_probe *in, wm_pt P, int vertical, int32_t L,
+                     size_t *niv)
+{
+    const int64_t Gx = (int64_t)P.x + in->X0, Gy = (int64_t)P.y + in->Y0;
+    int inside = 0;
+    *niv = 0;
+    if (river_intervals(in, Gx, Gy, P, vertical, L, 0, 0, niv, &inside) < 0)
+        return 0;
+    const long ntg =
+        in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L, niv) : 0;
+    if (ntg < 0 ||
+        (in->nledge && !lake_intervals(in, P, vertical, L, (size_t)ntg, niv)))
+        return 0;
+    if (*niv > 1)
+        sort_small(in->iv, *niv, 2 * sizeof *in->iv, cmp_interval);
+    return 1;
+}
+
+/* Sorted intervals a[0 .. n) (pairs) merged in place; returns how many. */
+static size_t merge_iv(double *a, size_t n)
+{
+    size_t m = 0;
+    for (size_t i = 0; i < n; i++)
+    {
+        if (m > 0 && a[2 * i] <= a[2 * m - 1])
+        {
+            a[2 * m - 1] = fmax(a[2 * m - 1], a[2 * i + 1]);
+            continue;
+        }
+        a[2 * m] = a[2 * i];
+        a[2 * m + 1] = a[2 * i + 1];
+        m++;
+    }
+    return m;
+}
+
+/* The pieces of positive length common to merged a and b, into out;
+ * returns how many (at most na + nb). */
+static size_t meet_iv(const double *a, size_t na, const double *b, size_t nb,
+                      double *out)
+{
+    size_t n = 0;
+    for (size_t i = 0, j = 0; i < na && j < nb;)
+    {
+        const double lo = fmax(a[2 * i], b[2 * j]);
+        const double hi = fmin(a[2 * i + 1], b[2 * j + 1]);
+        if (lo < hi)
+        {
+            out[2 * n] = lo;
+            out[2 * n + 1] = hi;
+            n++;
+        }
+        if (a[2 * i + 1] < b[2 * j + 1])
+            i++;
+        else
+            j++;
+    }
+    return n;
+}
+
+/* Merged a less the open pieces of merged b (a piece of a that b does not
+ * overlap is kept whole, a point too; what b cuts keeps positive length),
+ * into out; returns how many (at most na + nb). */
+static size_t cut_iv(const double *a, size_t na, const double *b, size_t nb,
+                     double *out)
+{
+    size_t n = 0, j = 0;
+    for (size_t i = 0; i < na; i++)
+    {
+        double cur = a[2 * i];
+        const double hi = a[2 * i + 1];
+        int cut = 0;
+        while (j < nb && b[2 * j + 1] <= cur)
+            j++;
+        for (size_t k = j; k < nb && b[2 * k] < hi; k++)
+        {
+            if (!(b[2 * k + 1] > cur && b[2 * k] < hi))
+                continue;
+            if (b[2 * k] > cur)
+            {
+                out[2 * n] = cur;
+                out[2 * n + 1] = b[2 * k];
+                n++;
+            }
+            cur = fmax(cur, b[2 * k + 1]);
+            cut = 1;
+        }
+        if (!cut || cur < hi)
+        {
+            out[2 * n] = cur;
+            out[2 * n + 1] = hi;
+            n++;
+        }
+    }
+    return n;
+}
+
+/* A block side's segment along which lake edges lie (in->dv): there the
+ * water is the lake's boundary alone, and it stays water only where the
+ * points a lattice unit across the side, in both blocks, are water (as a
+ * sample exactly 0 on a block line, field.c): a shore on the side moves a
+ * unit into its block, and the land of the block across that touches the
+ * side there stays a notch in it, not a hole a unit off it. Rewrites the
+ * sorted in->iv (*niv); 0 when out of memory. Both blocks find the same:
+ * the points across are a pure function of the global position. */
+static int side_rule(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
+                     int cls1, size_t *niv)
+{
+    /* w: the side's water, merged; d: the lake edges along it; a[k]: the
+     * water a unit across on each side; m: where both are water; x: the
+     * edges' parts where they are not */
+    const size_t nd = in->ndv;
+    double *w = malloc((2 * *niv + 2) * sizeof *w);
+    double *d = malloc((2 * nd + 2) * sizeof *d), *a[2] = {NULL, NULL};
+    double *m = NULL, *x = NULL;
+    size_t na[2] = {0, 0};
+    int ok = w && d;
+    if (ok)
+    {
+        memcpy(w, in->iv, 2 * *niv * sizeof *w);
+        memcpy(d, in->dv, 2 * nd * sizeof *d);
+    }
+    const size_t nw = ok ? merge_iv(w, *niv) : 0;
+    in->side = 0; /* the queries across are plain ones */
+    for (int k = 0; k < 2 && ok; k++)
+    {
+        const wm_pt Q = {P.x + (vertical ? 2 * k - 1 : 0),
+                         P.y + (vertical ? 0 : 2 * k - 1)};
+        ok = seg_water(in, Q, vertical, L, &na[k]) &&
+             (a[k] = malloc((2 * na[k] + 2) * sizeof *a[k])) != NULL;
+        if (ok)
+            na[k] =
+                merge_iv(memcpy(a[k], in->iv, 2 * na[k] * sizeof *w), na[k]);
+    }
+    if (ok)
+        ok = (m = malloc((2 * (na[0] + na[1]) + 2) * sizeof *m)) != NULL &&
+             (x = malloc((2 * (nd + na[0] + na[1]) + 2) * sizeof *x)) != NULL &&
+             wm_grow((void **)&in->iv, &in->ivcap,
+                     2 * (nw + nd + na[0] + na[1]) + 6, sizeof *in->iv);
+    if (ok)
+    {
+        sort_small(d, nd, 2 * sizeof *d, cmp_interval);
+        const size_t nm = meet_iv(a[0], na[0], a[1], na[1], m);
+        const size_t nx = cut_iv(d, merge_iv(d, nd), m, nm, x);
+        *niv = cut_iv(w, nw, x, nx, in->iv);
+        /* the ends keep their samples' classes, which the same rule gave */
+        for (int k = 0; k < 2; k++)
+            if ((k ? cls1 : cls0) == 1)
+            {
+                in->iv[2 * *niv] = in->iv[2 * *niv + 1] = k ? L : 0;
+                ++*niv;
+            }
+        sort_small(in->iv, *niv, 2 * sizeof *in->iv, cmp_interval);
+    }
+    free(w);
+    free(d);
+    free(a[0]);
+    free(a[1]);
+    free(m);
+    free(x);
+    return ok;
+}
+
+int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
+                       int *cls1, int32_t *off, int max)
+{
+    const int64_t Gx = (int64_t)P.x + in->X0, Gy = (int64_t)P.y + in->Y0;
+    const int32_t S = in->s->n * WM_Q;
+    size_t niv = 0;
+    int inside = 0; /* an input's boundary meets the segment, ends included */
+    const int r =
+        river_intervals(in, Gx, Gy, P, vertical, L, cls0, *cls1, &niv, &inside);
+    if (r <= 0)
+        return r;
     const size_t nriver = niv;
+    in->side = vertical ? P.x == 0 || P.x == S : P.y == 0 || P.y == S;
+    in->ndv = 0;
     const long ntg =
         in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L, &niv) : 0;
     if (ntg < 0)
@@ -729,6 +937,8 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
             return -1;
     if (niv > 1)
         sort_small(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
+    if (in->ndv && !side_rule(in, P, vertical, L, cls0, *cls1, &niv))
+        return -1;
     return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
 }
 
@@ -809,6 +1019,7 @@ void wm_probe_free(wm_probe *p)
     free(p->dmin);
     free(p->touched);
     free(p->iv);
+    free(p->dv);
     free(p->tg);
     free(p->corner);
     free(p->corner_joint);
