@@ -48,6 +48,10 @@ interest" whose exact shape the lattice cannot resolve by sampling alone:
             river whose bank or centre line runs along a lake edge, a river
             that loops with a repeated vertex; two times in three a river
             crossing.
+  spike     a lake's own sharp features: a spike of water (a convex corner
+            of half-angle 0.3-15 degrees), a notch of land as sharp cut
+            into it, or two lobes joined by a channel 0.05-1.5 px wide;
+            half the time a river passing by or through.
   seam      one of the four above with its feature of interest moved onto a
             block side (or, one time in five, a block corner): exactly on it
             one time in four, else within +-0.4 of the feature's size (at
@@ -96,7 +100,7 @@ EPSG = scenes.SCENE_EPSG  # 32631
 ORIGIN = (400000.0, 4699968.0)
 
 BASE_FAMILIES = ('wedge', 'parallel', 'island', 'subpixel')
-FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic', 'twins')
+FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic', 'twins', 'spike')
 
 
 # ----------------------------------------------------------------------------
@@ -494,9 +498,59 @@ def _twins(rng, px):
     return rivers, lakes, dict(kind=kind, width_m=w, scale=px)
 
 
+def _spike(rng, px):
+    """A lake's own sharp features: a spike of water (a convex corner of
+    half-angle 0.3-15 degrees, 2-15 m long), a notch of land cut into it as
+    sharp, or two lobes joined by a channel 0.05-1.5 px wide; half the time
+    a river passing by or through."""
+    from shapely.geometry import Polygon as _Poly
+    kind = rng.choice(('spike', 'notch', 'neck'))
+    d = rng.uniform(10.0, 30.0)
+    lobe = _Poly(_ngon(rng, 0.0, 0.0, d, rng.randint(5, 10), rough=0.15))
+    a = rng.uniform(0.0, 2.0 * math.pi)
+    u, n = (math.cos(a), math.sin(a)), (-math.sin(a), math.cos(a))
+    half = math.radians(_log_uniform(rng, 0.3, 15.0))
+    length = rng.uniform(2.0, 15.0)
+    meta = dict(kind=kind, scale=px)
+    if kind in ('spike', 'notch'):
+        # a thin triangle: tip at r0 + length along u (spike) or r0 -
+        # length (notch, r0 outside the lobe), base 2 length tan(half) wide
+        r0 = 0.5 * d * (0.7 if kind == 'spike' else 1.4)
+        tip = r0 + length if kind == 'spike' else r0 - length - 0.3 * d
+        w = (abs(tip - r0)) * math.tan(half)
+        tri = _Poly([(r0 * u[0] + w * n[0], r0 * u[1] + w * n[1]),
+                     (tip * u[0], tip * u[1]),
+                     (r0 * u[0] - w * n[0], r0 * u[1] - w * n[1])])
+        shape = lobe.union(tri) if kind == 'spike' else lobe.difference(tri)
+        meta.update(half_angle_deg=math.degrees(half), length_m=abs(tip - r0))
+    else:
+        gap = _log_uniform(rng, 0.05, 1.5) * px
+        other = _Poly(_ngon(rng, (d + length) * u[0], (d + length) * u[1], d,
+                            rng.randint(5, 10), rough=0.15))
+        h = gap / 2.0
+        chan = _Poly([(h * n[0], h * n[1]),
+                      ((d + length) * u[0] + h * n[0], (d + length) * u[1] + h * n[1]),
+                      ((d + length) * u[0] - h * n[0], (d + length) * u[1] - h * n[1]),
+                      (-h * n[0], -h * n[1])])
+        shape = lobe.union(other).union(chan)
+        meta.update(width_px=gap / px, length_m=length)
+    parts = list(getattr(shape, 'geoms', [shape]))
+    lakes = [(list(q.exterior.coords), [list(r.coords) for r in q.interiors])
+             for q in parts if not q.is_empty]
+    rivers = []
+    if rng.random() < 0.5:
+        b = a + rng.uniform(-0.5, 0.5)
+        off = rng.uniform(-0.3, 0.3) * d
+        m = (-math.sin(b), math.cos(b))
+        rivers.append(([(off * m[0] - d * math.cos(b), off * m[1] - d * math.sin(b)),
+                        (off * m[0] + 2 * d * math.cos(b), off * m[1] + 2 * d * math.sin(b))],
+                       rng.uniform(0.5, 5.0)))
+    return rivers, lakes, meta
+
+
 _GENERATORS = {'wedge': _wedge, 'parallel': _parallel, 'island': _island,
                'subpixel': _subpixel, 'shore': _shore, 'mosaic': _mosaic,
-               'twins': _twins}
+               'twins': _twins, 'spike': _spike}
 
 
 # ----------------------------------------------------------------------------

@@ -215,6 +215,14 @@ def test_generator_feature(scene):
         # inside the lap of a looping river
         assert m['kind'] in ('lake2', 'hole', 'river2', 'bank', 'loop'), scene.describe
         assert m['kind'] == 'loop' or w.distance(a) == 0, scene.describe
+    elif sub == 'spike':
+        # the lake's own spike, notch or channel, around its first lobe
+        assert m['kind'] in ('spike', 'notch', 'neck'), scene.describe
+        if m['kind'] == 'neck':
+            assert 0.05 - 1e-9 <= m['width_px'] <= 1.5 + 1e-9
+            assert w.distance(a) == 0, 'the lobe centre is land: %s' % scene.describe
+        else:
+            assert 0.3 - 1e-9 <= m['half_angle_deg'] <= 15.0 + 1e-9
     else:  # subpixel
         assert 0.1 - 1e-9 <= m['width_px'] <= 0.8 + 1e-9
         assert any(max(p.bounds[2] - p.bounds[0], p.bounds[3] - p.bounds[1]) <= 1.3 * px
