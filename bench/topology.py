@@ -34,7 +34,11 @@ family:
                1 px (of any kind for a ring with a pinch point: a lens may
                be joined to the water it touches): small islands and lakes
                that vanished; "/ small": how many such small oracle rings
-               the scenes have
+               the scenes have. An oracle ring shorter than two lattice
+               units (px / 128) both ways is below the lattice: excused
+               from being kept, from this count and from the oracle's side
+               of H (adversarial.resolvable), not from justifying an output
+               ring there
   pinched      oracle rings with a pinch point (touching another ring or
                themselves at a point: the even-odd parts of an invalid lake
                whose holes overlap), so excused as above
