@@ -294,37 +294,28 @@ double wm_probe_distance(wm_probe *in, double x, double y, double reach)
 
 /* ---- crossings of a segment ------------------------------------------- */
 
-/* Appends the water interval [lo, hi] clipped to [0, L]. */
-static int add_interval(wm_probe *in, size_t *n, double lo, double hi,
-                        int32_t L)
+/* Appends [lo, hi] clipped to [0, L] to the pairs *v (*n of them, room
+ * for *cap values); 0 when out of memory. */
+static int push_interval(double **v, size_t *cap, size_t *n, double lo,
+                         double hi, int32_t L)
 {
     lo = lo < 0 ? 0 : lo;
     hi = hi > L ? L : hi;
     if (!(lo <= hi))
         return 1;
-    if (!wm_grow((void **)&in->iv, &in->ivcap, 2 * (*n + 1), sizeof *in->iv))
+    if (!wm_grow((void **)v, cap, 2 * (*n + 1), sizeof **v))
         return 0;
-    in->iv[2 * *n] = lo;
-    in->iv[2 * *n + 1] = hi;
+    (*v)[2 * *n] = lo;
+    (*v)[2 * *n + 1] = hi;
     (*n)++;
     return 1;
 }
 
-/* Notes [lo, hi] clipped to [0, L], the part of a block side's segment
- * that a lake edge lying along it covers (see side_rule). */
-static int add_side_edge(wm_probe *in, double lo, double hi, int32_t L)
+/* Appends the water interval [lo, hi] clipped to [0, L]. */
+static int add_interval(wm_probe *in, size_t *n, double lo, double hi,
+                        int32_t L)
 {
-    lo = lo < 0 ? 0 : lo;
-    hi = hi > L ? L : hi;
-    if (!(lo < hi))
-        return 1;
-    if (!wm_grow((void **)&in->dv, &in->dvcap, 2 * (in->ndv + 1),
-                 sizeof *in->dv))
-        return 0;
-    in->dv[2 * in->ndv] = lo;
-    in->dv[2 * in->ndv + 1] = hi;
-    in->ndv++;
-    return 1;
+    return push_interval(&in->iv, &in->ivcap, n, lo, hi, L);
 }
 
 /* The t-range where alpha * t + beta lies in [lo, hi] intersected with
@@ -477,8 +468,9 @@ static int edge_cover(wm_probe *in, const wm_lake_edge *g, int64_t Gx,
     {
         const double lo = (double)(au < bu ? au : bu);
         const double hi = (double)(au > bu ? au : bu);
+        /* noted apart too: on a block side, side_rule decides it */
         if (!add_interval(in, niv, lo, hi, L) ||
-            (in->side && !add_side_edge(in, lo, hi, L)))
+            !push_interval(&in->dv, &in->dvcap, &in->ndv, lo, hi, L))
             return -1;
         return (au <= 0 && bu >= 0) || (bu <= 0 && au >= 0);
     }
@@ -866,7 +858,6 @@ static int side_rule(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
         memcpy(d, in->dv, 2 * nd * sizeof *d);
     }
     const size_t nw = ok ? merge_iv(w, *niv) : 0;
-    in->side = 0; /* the queries across are plain ones */
     for (int k = 0; k < 2 && ok; k++)
     {
         const wm_pt Q = {P.x + (vertical ? 2 * k - 1 : 0),
@@ -918,7 +909,6 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
     if (r <= 0)
         return r;
     const size_t nriver = niv;
-    in->side = vertical ? P.x == 0 || P.x == S : P.y == 0 || P.y == S;
     in->ndv = 0;
     const long ntg =
         in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L, &niv) : 0;
@@ -937,7 +927,8 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
             return -1;
     if (niv > 1)
         sort_small(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
-    if (in->ndv && !side_rule(in, P, vertical, L, cls0, *cls1, &niv))
+    const int on_side = vertical ? P.x == 0 || P.x == S : P.y == 0 || P.y == S;
+    if (on_side && in->ndv && !side_rule(in, P, vertical, L, cls0, *cls1, &niv))
         return -1;
     return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
 }

@@ -74,9 +74,8 @@ extern "C"
         uint32_t *touched;
         double *iv; /* water intervals, pairs */
         size_t ivcap;
-        double *dv; /* lake edges along a block side's segment, pairs */
+        double *dv; /* lake edges along the query's segment, pairs */
         size_t ndv, dvcap;
-        int side; /* the query's segment lies on the block square */
         struct wm_probe_toggle *tg;
         size_t tgcap;
     } wm_probe;
