@@ -33,6 +33,15 @@ static void ring(wm_rings *r, const int *xy, int n)
         abort();
 }
 
+/* A new set holding one ring. */
+static wm_rings ring_of(const int *xy, int n)
+{
+    wm_rings r;
+    memset(&r, 0, sizeof r);
+    ring(&r, xy, n);
+    return r;
+}
+
 static double angle_min(wm_pt a, wm_pt b, wm_pt c)
 {
     const wm_pt p[3] = {a, b, c};
@@ -189,7 +198,7 @@ int main(void)
         wm_rings r;
         memset(&r, 0, sizeof r);
         square_with_hole(&r, 30000);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "square with hole: %zu triangles, %zu points added", x.ntris,
@@ -208,7 +217,7 @@ int main(void)
         static const int strip[] = {10,    10,  10000, 300, 20000, 10,
                                     20000, 110, 10000, 400, 10,    110};
         ring(&r, strip, 6);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "strip: %zu triangles, %zu points added", x.ntris, x.nextra);
@@ -230,7 +239,7 @@ int main(void)
         memset(&r, 0, sizeof r);
         static const int wedge[] = {10, 10, 50000, 400, 50000, 1400};
         ring(&r, wedge, 3);
-        wm_refine_opts o = {20, 3000, 1 << 20, 0, 0, NULL, NULL};
+        wm_refine_opts o = {20, 3000, 1 << 20, 0, 0, NULL, NULL, NULL};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "wedge: %zu triangles, %zu points", x.ntris, x.nextra);
@@ -269,7 +278,7 @@ int main(void)
             push(&r, 52000, 52000);
             push(&r, 52000, 48000);
             wm_rings_close(&r);
-            wm_refine_opts o = {20.7, 4000, 1 << 20, 0, 0, NULL, NULL};
+            wm_refine_opts o = {20.7, 4000, 1 << 20, 0, 0, NULL, NULL, NULL};
             result x = run(&r, &o);
             fail += !(x.ntris > 0 && x.ok_orient && x.ok_used);
             bad += x.below > x.st.small_input + x.st.left;
@@ -298,8 +307,8 @@ int main(void)
         memset(&r, 0, sizeof r);
         const int sq[] = {0, 0, S, 0, S, S, 0, S};
         ring(&r, sq, 4);
-        wm_refine_opts o = {20,   1500, S, 7 * (int64_t)S, 3 * (int64_t)S,
-                            NULL, NULL};
+        wm_refine_opts o = {20,   1500, S,   7 * (int64_t)S, 3 * (int64_t)S,
+                            NULL, NULL, NULL};
         uint32_t *tris = NULL;
         wm_pt *extra = NULL;
         size_t nt = 0, nx = 0;
@@ -345,7 +354,7 @@ int main(void)
             const int xy[] = {0, 0, W, 0, W, H, dx, H, 0, y0};
             ring(&r, xy, 5);
             const wm_refine_opts o = {
-                20, k % 2 ? 900.0 : 0.0, 1 << 20, 0, 0, NULL, NULL};
+                20, k % 2 ? 900.0 : 0.0, 1 << 20, 0, 0, NULL, NULL, NULL};
             uint32_t *tris = NULL;
             wm_pt *extra = NULL;
             size_t nt = 0, nx = 0;
@@ -377,11 +386,7 @@ int main(void)
         const int a[] = {S,     10000,     S,     30000,   S - 20000,
                          30000, S - 20000, 12000, S - 800, 10400};
         const int b[] = {0, 10000, 20000, 11000, 20000, 30000, 0, 30000};
-        wm_rings ra, rb;
-        memset(&ra, 0, sizeof ra);
-        memset(&rb, 0, sizeof rb);
-        ring(&ra, a, 5);
-        ring(&rb, b, 4);
+        wm_rings ra = ring_of(a, 5), rb = ring_of(b, 4);
         const shores sh = {4,
                            {{S - 20000, 12000, S - 800, 10400},
                             {S - 800, 10400, S, 10000},
@@ -391,9 +396,11 @@ int main(void)
         for (int with = 0; with < 2; with++)
         {
             const wm_refine_opts oa = {
-                20, 0, S, 0, 0, with ? room_of_shores : NULL, (void *)&sh};
+                20,          0,   S, 0, 0, with ? room_of_shores : NULL,
+                (void *)&sh, NULL};
             const wm_refine_opts ob = {
-                20, 0, S, S, 0, with ? room_of_shores : NULL, (void *)&sh};
+                20,          0,   S, S, 0, with ? room_of_shores : NULL,
+                (void *)&sh, NULL};
             int32_t ya[64], yb[64];
             wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
             const int na = side_points(&ra, &oa, S, ya, 64, &sa);
@@ -420,6 +427,71 @@ int main(void)
         wm_rings_free(&ra);
         wm_rings_free(&rb);
     }
+    /* a land notch 17 units wide at the side x = S between two blocks (6
+     * units deep in the left block, 40 in the right one), water along the
+     * side on both sides of it: with the blocks' water along the side
+     * (wm_side_ends, the same in both), the side pieces next to the notch
+     * are graded down to about half its width, both blocks cut the side
+     * alike, and no triangle is left sharp; without, the pieces next to
+     * the notch stay 8 pixels long and leave sharp triangles on it */
+    {
+        const int S = 51200;
+        const int a[] = {S - 20000, 5000, S,     5000, S,     20000,     S - 6,
+                         20008,     S,    20017, S,    35000, S - 20000, 35000};
+        const int b[] = {0,     5000, 20000, 5000, 20000, 35000, 0,
+                         35000, 0,    20017, 40,   20008, 0,     20000};
+        wm_rings ra = ring_of(a, 7), rb = ring_of(b, 7);
+        const shores sh = {4,
+                           {{S - 20000, 5000, S + 20000, 5000},
+                            {S - 20000, 35000, S + 20000, 35000},
+                            {S, 20000, S - 6, 20008},
+                            {S, 20000, S + 40, 20008}}};
+        wm_side_ends ea, eb;
+        const int built =
+            wm_side_ends_build(&ea, &ra, S) && wm_side_ends_build(&eb, &rb, S);
+        size_t left[2] = {0, 0};
+        int32_t near = 0, differ = 0, fail = !built;
+        for (int with = 0; built && with < 2; with++)
+        {
+            const wm_refine_opts oa = {
+                20, 0, S, 0, 0, room_of_shores, (void *)&sh, with ? &ea : NULL};
+            const wm_refine_opts ob = {
+                20, 0, S, S, 0, room_of_shores, (void *)&sh, with ? &eb : NULL};
+            int32_t ya[512], yb[512];
+            wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
+            const int na = side_points(&ra, &oa, S, ya, 512, &sa);
+            const int nb = side_points(&rb, &ob, 0, yb, 512, &sb);
+            fail += na < 0 || nb < 0 || na >= 512;
+            left[with] = sa.left + sb.left;
+            if (!with || fail)
+                continue;
+            differ = na != nb;
+            for (int i = 0; !differ && i < na; i++)
+                differ = ya[i] != yb[i];
+            /* the side points nearest the notch, below and above it */
+            int32_t below = 0, above = 35000;
+            for (int i = 0; i < na; i++)
+            {
+                below = ya[i] < 20000 && ya[i] > below ? ya[i] : below;
+                above = ya[i] > 20017 && ya[i] < above ? ya[i] : above;
+            }
+            near =
+                20000 - below > above - 20017 ? 20000 - below : above - 20017;
+        }
+        TAP_EQ(fail, 0, "a notch at a side: refined in both blocks");
+        TAP_EQ(differ, 0, "a notch at a side: both blocks cut it alike");
+        TAP_OK(near > 0 && near <= 16,
+               "a notch at a side: the pieces next to it %d units long",
+               (int)near);
+        TAP_OK(left[1] == 0 && left[0] > 0,
+               "a notch at a side: %zu sharp triangles left, %zu without "
+               "the water along the side",
+               left[1], left[0]);
+        wm_side_ends_free(&ea);
+        wm_side_ends_free(&eb);
+        wm_rings_free(&ra);
+        wm_rings_free(&rb);
+    }
     /* a shore 30 units from the side x = S near y = 20000 only: the side
      * edge from the block corner (S, 0) to (S, 40000) is graded finely
      * there and coarsely elsewhere, with no piece more than four times as
@@ -438,8 +510,10 @@ int main(void)
         ring(&ra, a, 4);
         ring(&rb, b, 4);
         const shores sh = {1, {{S - 30, 19000, S - 30, 21000}}};
-        const wm_refine_opts oa = {20, 0, S, 0, 0, room_of_shores, (void *)&sh};
-        const wm_refine_opts ob = {20, 0, S, S, 0, room_of_shores, (void *)&sh};
+        const wm_refine_opts oa = {20,          0,   S, 0, 0, room_of_shores,
+                                   (void *)&sh, NULL};
+        const wm_refine_opts ob = {20,          0,   S, S, 0, room_of_shores,
+                                   (void *)&sh, NULL};
         int32_t ya[512], yb[512];
         wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
         const int na = side_points(&ra, &oa, S, ya, 510, &sa);
@@ -481,7 +555,7 @@ int main(void)
         memset(&r, 0, sizeof r);
         static const int cw[] = {0, 0, 0, 100, 100, 0};
         ring(&r, cw, 3);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL};
         uint32_t *tris = NULL;
         wm_pt *extra = NULL;
         size_t nt = 0, nx = 0;

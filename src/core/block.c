@@ -269,16 +269,20 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
     const int refine = opts->min_angle > 0 || opts->max_edge > 0;
     const int64_t S = (int64_t)s->n * WM_Q;
     side_items si;
+    wm_side_ends ends;
     const wm_refine_opts ro = {
         opts->min_angle, opts->max_edge, (int32_t)S, res->bx * S,
-        res->by * S,     side_room,      &si};
+        res->by * S,     side_room,      &si,        &ends};
     wm_refine_stats rs = {0, 0, 0};
     size_t cap = 0;
     wm_status st = WM_OK;
     memset(&si, 0, sizeof si);
+    memset(&ends, 0, sizeof ends);
     res->poly_tri = calloc(res->npolys + 1, sizeof *res->poly_tri);
-    if (!res->poly_tri || (opts->min_angle > 0 &&
-                           side_items_init(&si, s, res->bx, res->by) != WM_OK))
+    if (!res->poly_tri ||
+        (opts->min_angle > 0 &&
+         (side_items_init(&si, s, res->bx, res->by) != WM_OK ||
+          !wm_side_ends_build(&ends, &res->rings, (int32_t)S))))
         st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory triangulating");
     for (size_t p = 0; st == WM_OK && p < res->npolys; p++)
     {
@@ -308,6 +312,7 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
         free(x);
     }
     side_items_free(&si);
+    wm_side_ends_free(&ends);
     res->steiner = rs.steiner;
     res->small_input = rs.small_input;
     res->left = rs.left;

@@ -196,12 +196,17 @@ static wm_pt midpoint(wm_pt a, wm_pt b)
                    (int32_t)(((int64_t)a.y + b.y) >> 1)};
 }
 
+/* Whether edge a-b lies on the square of side S. */
+static int on_side(int32_t S, wm_pt a, wm_pt b)
+{
+    return (a.x == b.x && (a.x == 0 || a.x == S)) ||
+           (a.y == b.y && (a.y == 0 || a.y == S));
+}
+
 /* Whether ring edge a-b lies on the block square. */
 static int on_square(const refiner *r, wm_pt a, wm_pt b)
 {
-    const int32_t S = r->o->side;
-    return (a.x == b.x && (a.x == 0 || a.x == S)) ||
-           (a.y == b.y && (a.y == 0 || a.y == S));
+    return on_side(r->o->side, a, b);
 }
 
 /* Appends to out the points cutting edge a -> b (not on the block
@@ -249,30 +254,122 @@ static int lpush(lbuf *b, int64_t x)
     return wm_push((void **)&b->a, &b->n, &b->cap, &x, sizeof x);
 }
 
-/* Appends to cut the points halving piece (u, v) of side edge (e0, e1),
+/* A side edge's span e0 < e1 (global, along the side) and the shortest
+ * piece grading makes at each end. */
+typedef struct
+{
+    int64_t e0, e1, min0, min1;
+} side_span;
+
+/* Appends to cut the points halving piece (u, v) of side edge e,
  * ascending: a piece is halved at its global midpoint while it is longer
  * than its room, o->room at that midpoint (no shore is nearer), and than
- * GRADE_MIN at an end of the side edge or GRADE_INNER elsewhere (so a side
- * edge makes at most 16 pieces per pixel, only where the shore runs that
- * close to it, and one query per piece; each
- * query reads the edges near the point, see wm_scene_depth; the recursion
- * is as deep as log2 of the side in pixels). A piece no longer than its
- * room has its diametral circle within half the room of its midpoint,
- * clear of the inputs' shore by half the room. Everything here is a
- * function of global positions only, so both blocks sharing the side find
- * the same points. */
+ * the end's shortest piece (e->min0, e->min1) at an end of the side edge or
+ * GRADE_INNER elsewhere (so a side edge makes at most 16 pieces per pixel,
+ * only where the shore runs that close to it, and one query per piece;
+ * each query reads the edges near the point, see wm_scene_depth; the
+ * recursion is as deep as log2 of the side in pixels). A piece no longer
+ * than its room has its diametral circle within half the room of its
+ * midpoint, clear of the inputs' shore by half the room. Everything here
+ * is a function of global positions and of the water along the side
+ * only, so both blocks sharing the side find the same points. */
 static int grade_side(const refiner *r, int vertical, int64_t F, int64_t u,
-                      int64_t v, int64_t e0, int64_t e1, lbuf *cut)
+                      int64_t v, const side_span *e, lbuf *cut)
 {
-    if (v - u <= (u == e0 || v == e1 ? GRADE_MIN : GRADE_INNER))
+    const int64_t at0 = u == e->e0 ? e->min0 : INT64_MAX;
+    const int64_t at1 = v == e->e1 ? e->min1 : INT64_MAX;
+    const int64_t least = at0 < at1 ? at0 : at1;
+    if (v - u <= (least < INT64_MAX ? least : GRADE_INNER))
         return 1;
     const int64_t m = wm_floordiv(u + v, 2);
     const double len = (double)(v - u);
     const double room = vertical ? r->o->room(r->o->room_user, F, m, len)
                                  : r->o->room(r->o->room_user, m, F, len);
     return len <= room ||
-           (grade_side(r, vertical, F, u, m, e0, e1, cut) && lpush(cut, m) &&
-            grade_side(r, vertical, F, m, v, e0, e1, cut));
+           (grade_side(r, vertical, F, u, m, e, cut) && lpush(cut, m) &&
+            grade_side(r, vertical, F, m, v, e, cut));
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* Side (bottom 0, right 1, top 2, left 3) of the block square holding
+ * ring edge a-b, which lies on it. */
+static int side_of(wm_pt a, wm_pt b)
+{
+    return a.x == b.x ? (a.x == 0 ? 3 : 1) : (a.y == 0 ? 0 : 2);
+}
+
+int wm_side_ends_build(wm_side_ends *e, const wm_rings *rings, int32_t S)
+{
+    size_t cap[4] = {0, 0, 0, 0};
+    memset(e, 0, sizeof *e);
+    for (size_t q = 0; q < rings->nrings; q++)
+    {
+        const size_t b0 = rings->start[q], len = rings->start[q + 1] - b0;
+        for (size_t i = 0; i < len; i++)
+        {
+            const wm_pt a = rings->pts[b0 + i],
+                        b = rings->pts[b0 + (i + 1) % len];
+            if (!on_side(S, a, b))
+                continue;
+            const int s = side_of(a, b);
+            const uint64_t two[2] = {(uint64_t)(s & 1 ? a.y : a.x),
+                                     (uint64_t)(s & 1 ? b.y : b.x)};
+            if (!wm_push((void **)&e->at[s], &e->n[s], &cap[s], &two[0],
+                         sizeof two[0]) ||
+                !wm_push((void **)&e->at[s], &e->n[s], &cap[s], &two[1],
+                         sizeof two[1]))
+            {
+                wm_side_ends_free(e);
+                return 0;
+            }
+        }
+    }
+    for (int s = 0; s < 4; s++)
+        if (e->n[s] > 1)
+            qsort(e->at[s], e->n[s], sizeof *e->at[s], cmp_u64);
+    return 1;
+}
+
+void wm_side_ends_free(wm_side_ends *e)
+{
+    for (int s = 0; s < 4; s++)
+        free(e->at[s]);
+    memset(e, 0, sizeof *e);
+}
+
+/* The land along side s from the end p of a side edge to the next water
+ * beyond it, dir -1 (below p) or +1: 0 where water touches p there too
+ * (an end twice) or there is none (the land reaches the corner). */
+static int64_t land_gap(const wm_side_ends *e, int s, int32_t p, int dir)
+{
+    const uint64_t *a = e->at[s];
+    const size_t lo = wm_lower_u64(a, e->n[s], (uint64_t)p);
+    const size_t hi = wm_lower_u64(a, e->n[s], (uint64_t)p + 1);
+    if (hi - lo >= 2)
+        return 0;
+    if (dir < 0)
+        return lo > 0 ? (int64_t)p - (int64_t)a[lo - 1] : 0;
+    return hi < e->n[s] ? (int64_t)a[hi] - p : 0;
+}
+
+/* The shortest piece grading makes at an end of a side edge whose land
+ * gap along the side to the next water is gap (0: none): GRADE_MIN, or
+ * half the gap where that is less, down to GRADE_INNER. A land notch a
+ * fraction of a pixel wide at the side (a speck of land between two
+ * water pieces reaching the side) has shore edges that short; a piece of
+ * several pixels next to it, which refinement may not split, left
+ * triangles of 2-7 degrees on the synthetic L1. */
+static int64_t end_min(int64_t gap)
+{
+    const int64_t h = gap / 2;
+    return gap <= 0 || h >= GRADE_MIN ? GRADE_MIN
+           : h > GRADE_INNER          ? h
+                                      : GRADE_INNER;
 }
 
 /* Balances the pieces e0 < cut[0] < ... < e1 of a side edge: a piece
@@ -344,10 +441,14 @@ static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
     const int vertical = a.x == b.x;
     const int64_t o = vertical ? r->o->Y0 : r->o->X0;
     const int64_t F = vertical ? r->o->X0 + a.x : r->o->Y0 + a.y;
-    const int64_t ga = o + (vertical ? a.y : a.x);
-    const int64_t gb = o + (vertical ? b.y : b.x);
-    const int64_t e0 = ga < gb ? ga : gb, e1 = ga < gb ? gb : ga;
+    const int32_t pa = vertical ? a.y : a.x, pb = vertical ? b.y : b.x;
+    const int32_t p0 = pa < pb ? pa : pb, p1 = pa < pb ? pb : pa;
+    const int64_t e0 = o + p0, e1 = o + p1;
     const int grade = r->o->min_angle > 0 && r->o->room;
+    const wm_side_ends *ends = r->o->ends;
+    const int s = side_of(a, b);
+    const side_span e = {e0, e1, end_min(ends ? land_gap(ends, s, p0, -1) : 0),
+                         end_min(ends ? land_gap(ends, s, p1, +1) : 0)};
     lbuf cut = {NULL, 0, 0};
     int ok = 1;
     for (int64_t u = e0; ok && u < e1;)
@@ -356,14 +457,14 @@ static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
          * else the end */
         int64_t v = L >= 1 && e1 - e0 > L ? (wm_floordiv(u, L) + 1) * L : e1;
         v = v < e1 ? v : e1;
-        ok = (!grade || grade_side(r, vertical, F, u, v, e0, e1, &cut)) &&
+        ok = (!grade || grade_side(r, vertical, F, u, v, &e, &cut)) &&
              (v == e1 || lpush(&cut, v));
         u = v;
     }
     ok = ok && (!grade || balance_side(&cut, e0, e1, o, o + r->o->side));
     for (size_t i = 0; ok && i < cut.n; i++)
     {
-        const int64_t g = ga < gb ? cut.a[i] : cut.a[cut.n - 1 - i];
+        const int64_t g = pa < pb ? cut.a[i] : cut.a[cut.n - 1 - i];
         const wm_pt m = vertical ? (wm_pt){a.x, (int32_t)(g - o)}
                                  : (wm_pt){(int32_t)(g - o), a.y};
         int32_t im;

@@ -12,6 +12,23 @@ extern "C"
 {
 #endif
 
+    /** The ends of a block's water along its square: per side (bottom,
+     *  right, top, left), the ends of the ring edges lying on it,
+     *  block-local positions along the side, ascending (a position shared
+     *  by two edges is kept twice). The blocks on both sides of a shared
+     *  side hold the same water there, so the same ends. */
+    typedef struct
+    {
+        uint64_t *at[4];
+        size_t n[4];
+    } wm_side_ends;
+
+    /** Collects the ends of every ring (all of a block's polygons) on the
+     *  square of side `side`. 0 when out of memory. */
+    int wm_side_ends_build(wm_side_ends *e, const wm_rings *rings,
+                           int32_t side);
+    void wm_side_ends_free(wm_side_ends *e);
+
     /** What to refine to. */
     typedef struct
     {
@@ -26,6 +43,10 @@ extern "C"
          *  graded (only max_edge cuts them) */
         double (*room)(void *user, int64_t X, int64_t Y, double cap);
         void *room_user;
+        /** with room: the block's water along its square (every polygon's),
+         *  which bounds the pieces at a side edge's end by the land gap to
+         *  the next water along the side; NULL: no such bound */
+        const wm_side_ends *ends;
     } wm_refine_opts;
 
     /** What refining left undone (statistics, summed over polygons). */
@@ -53,18 +74,18 @@ extern "C"
      * max_edge, at the global lattice multiples of max_edge along the side;
      * with min_angle and o->room, each piece is halved (at its global
      * midpoint, rounded down) while it is longer than its room at that
-     * midpoint and than 8 pixels at an end of the side edge, 1/16 pixel
-     * elsewhere: no point of the inputs' shore then lies within half the
-     * room of its diametral circle, so refinement next to the side seldom
-     * needs to split it (the extracted shore lies within about a pixel
-     * and SIMPLIFY of the inputs'); then, while a piece is more than four
-     * times as long as a neighbour (or, at a block corner, than 16
-     * pixels: four times 4 pixels assumed beyond it), it is halved too. Rounds
-     * of batch insertion (into the triangulation kept from the round before:
-     * wm_cdt_insert, wm_cdt_split) repeat until nothing is bad or a round
-     * changes nothing; bounds
-     * on rounds and points stop a run that does not converge (then `left`
-     * counts what remains).
+     * midpoint and than 8 pixels at an end of the side edge (half the land
+     * gap to the next water along the side where that is less, down to
+     * 1/16 pixel: o->ends), 1/16 pixel elsewhere: no point of the inputs' shore
+     * then lies within half the room of its diametral circle, so refinement
+     * next to the side seldom needs to split it (the extracted shore lies
+     * within about a pixel and SIMPLIFY of the inputs'); then, while a piece is
+     * more than four times as long as a neighbour (or, at a block corner, than
+     * 16 pixels: four times 4 pixels assumed beyond it), it is halved too.
+     * Rounds of batch insertion (into the triangulation kept from the round
+     * before: wm_cdt_insert, wm_cdt_split) repeat until nothing is bad or a
+     * round changes nothing; bounds on rounds and points stop a run that does
+     * not converge (then `left` counts what remains).
      *
      * Guarantee (Ruppert, exact arithmetic): min_angle up to 20.7 degrees
      * is met when no input angle is below 60 degrees. Here triangles at an
