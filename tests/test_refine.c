@@ -9,6 +9,7 @@
 #include "cdt.h"
 #include "lattice.h"
 #include "refine.h"
+#include "scene.h"
 #include "tap.h"
 
 #include <math.h>
@@ -198,7 +199,7 @@ int main(void)
         wm_rings r;
         memset(&r, 0, sizeof r);
         square_with_hole(&r, 30000);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL, 0};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "square with hole: %zu triangles, %zu points added", x.ntris,
@@ -217,7 +218,7 @@ int main(void)
         static const int strip[] = {10,    10,  10000, 300, 20000, 10,
                                     20000, 110, 10000, 400, 10,    110};
         ring(&r, strip, 6);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL, 0};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "strip: %zu triangles, %zu points added", x.ntris, x.nextra);
@@ -239,7 +240,7 @@ int main(void)
         memset(&r, 0, sizeof r);
         static const int wedge[] = {10, 10, 50000, 400, 50000, 1400};
         ring(&r, wedge, 3);
-        wm_refine_opts o = {20, 3000, 1 << 20, 0, 0, NULL, NULL, NULL};
+        wm_refine_opts o = {20, 3000, 1 << 20, 0, 0, NULL, NULL, NULL, 0};
         result x = run(&r, &o);
         TAP_OK(x.ntris > 0 && x.ok_orient && x.ok_used,
                "wedge: %zu triangles, %zu points", x.ntris, x.nextra);
@@ -278,7 +279,7 @@ int main(void)
             push(&r, 52000, 52000);
             push(&r, 52000, 48000);
             wm_rings_close(&r);
-            wm_refine_opts o = {20.7, 4000, 1 << 20, 0, 0, NULL, NULL, NULL};
+            wm_refine_opts o = {20.7, 4000, 1 << 20, 0, 0, NULL, NULL, NULL, 0};
             result x = run(&r, &o);
             fail += !(x.ntris > 0 && x.ok_orient && x.ok_used);
             bad += x.below > x.st.small_input + x.st.left;
@@ -307,8 +308,8 @@ int main(void)
         memset(&r, 0, sizeof r);
         const int sq[] = {0, 0, S, 0, S, S, 0, S};
         ring(&r, sq, 4);
-        wm_refine_opts o = {20,   1500, S,   7 * (int64_t)S, 3 * (int64_t)S,
-                            NULL, NULL, NULL};
+        wm_refine_opts o = {20,   1500, S, 7 * (int64_t)S, 3 * (int64_t)S, NULL,
+                            NULL, NULL, 0};
         uint32_t *tris = NULL;
         wm_pt *extra = NULL;
         size_t nt = 0, nx = 0;
@@ -354,7 +355,7 @@ int main(void)
             const int xy[] = {0, 0, W, 0, W, H, dx, H, 0, y0};
             ring(&r, xy, 5);
             const wm_refine_opts o = {
-                20, k % 2 ? 900.0 : 0.0, 1 << 20, 0, 0, NULL, NULL, NULL};
+                20, k % 2 ? 900.0 : 0.0, 1 << 20, 0, 0, NULL, NULL, NULL, 0};
             uint32_t *tris = NULL;
             wm_pt *extra = NULL;
             size_t nt = 0, nx = 0;
@@ -396,11 +397,11 @@ int main(void)
         for (int with = 0; with < 2; with++)
         {
             const wm_refine_opts oa = {
-                20,          0,   S, 0, 0, with ? room_of_shores : NULL,
-                (void *)&sh, NULL};
+                20,          0,    S,   0, 0, with ? room_of_shores : NULL,
+                (void *)&sh, NULL, WM_Q};
             const wm_refine_opts ob = {
-                20,          0,   S, S, 0, with ? room_of_shores : NULL,
-                (void *)&sh, NULL};
+                20,          0,    S,   S, 0, with ? room_of_shores : NULL,
+                (void *)&sh, NULL, WM_Q};
             int32_t ya[64], yb[64];
             wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
             const int na = side_points(&ra, &oa, S, ya, 64, &sa);
@@ -454,9 +455,11 @@ int main(void)
         for (int with = 0; built && with < 2; with++)
         {
             const wm_refine_opts oa = {
-                20, 0, S, 0, 0, room_of_shores, (void *)&sh, with ? &ea : NULL};
+                20,  0, S, 0, 0, room_of_shores, (void *)&sh, with ? &ea : NULL,
+                WM_Q};
             const wm_refine_opts ob = {
-                20, 0, S, S, 0, room_of_shores, (void *)&sh, with ? &eb : NULL};
+                20,  0, S, S, 0, room_of_shores, (void *)&sh, with ? &eb : NULL,
+                WM_Q};
             int32_t ya[512], yb[512];
             wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
             const int na = side_points(&ra, &oa, S, ya, 512, &sa);
@@ -492,6 +495,41 @@ int main(void)
         wm_rings_free(&ra);
         wm_rings_free(&rb);
     }
+    /* a river 20000 units wide across the side x = S, its shores square to
+     * it: the side pieces at the shores are graded down to 8 pixels at
+     * SIMPLIFY of a pixel, and to one pixel at SIMPLIFY=0, whose shore
+     * edges are that short */
+    {
+        const int S = 51200;
+        const int a[] = {S - 20000, 10000, S,         10000,
+                         S,         30000, S - 20000, 30000};
+        wm_rings ra = ring_of(a, 4);
+        const shores sh = {2,
+                           {{S - 20000, 10000, S + 20000, 10000},
+                            {S - 20000, 30000, S + 20000, 30000}}};
+        int32_t first[2] = {0, 0};
+        int fail = 0;
+        for (int k = 0; k < 2; k++)
+        {
+            const wm_refine_opts o = {20,          0,    S,
+                                      0,           0,    room_of_shores,
+                                      (void *)&sh, NULL, k ? 0.0 : WM_Q};
+            int32_t y[512];
+            wm_refine_stats st = {0, 0, 0};
+            const int n = side_points(&ra, &o, S, y, 512, &st);
+            fail += n <= 0 || n >= 512;
+            first[k] = n > 0 ? y[0] - 10000 : 0;
+        }
+        TAP_EQ(fail, 0, "a river across a side: refined");
+        TAP_OK(first[0] > 4 * WM_Q && first[0] <= 8 * WM_Q,
+               "a river across a side: end piece %d units at SIMPLIFY of a "
+               "pixel",
+               (int)first[0]);
+        TAP_OK(first[1] > 0 && first[1] <= WM_Q,
+               "a river across a side: end piece %d units at SIMPLIFY=0",
+               (int)first[1]);
+        wm_rings_free(&ra);
+    }
     /* a shore 30 units from the side x = S near y = 20000 only: the side
      * edge from the block corner (S, 0) to (S, 40000) is graded finely
      * there and coarsely elsewhere, with no piece more than four times as
@@ -510,10 +548,10 @@ int main(void)
         ring(&ra, a, 4);
         ring(&rb, b, 4);
         const shores sh = {1, {{S - 30, 19000, S - 30, 21000}}};
-        const wm_refine_opts oa = {20,          0,   S, 0, 0, room_of_shores,
-                                   (void *)&sh, NULL};
-        const wm_refine_opts ob = {20,          0,   S, S, 0, room_of_shores,
-                                   (void *)&sh, NULL};
+        const wm_refine_opts oa = {20,          0,    S,   0, 0, room_of_shores,
+                                   (void *)&sh, NULL, WM_Q};
+        const wm_refine_opts ob = {20,          0,    S,   S, 0, room_of_shores,
+                                   (void *)&sh, NULL, WM_Q};
         int32_t ya[512], yb[512];
         wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
         const int na = side_points(&ra, &oa, S, ya, 510, &sa);
@@ -555,7 +593,7 @@ int main(void)
         memset(&r, 0, sizeof r);
         static const int cw[] = {0, 0, 0, 100, 100, 0};
         ring(&r, cw, 3);
-        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL};
+        wm_refine_opts o = {20, 0, 1 << 20, 0, 0, NULL, NULL, NULL, 0};
         uint32_t *tris = NULL;
         wm_pt *extra = NULL;
         size_t nt = 0, nx = 0;

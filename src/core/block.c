@@ -272,7 +272,8 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
     wm_side_ends ends;
     const wm_refine_opts ro = {
         opts->min_angle, opts->max_edge, (int32_t)S, res->bx * S,
-        res->by * S,     side_room,      &si,        &ends};
+        res->by * S,     side_room,      &si,        &ends,
+        opts->simplify};
     wm_refine_stats rs = {0, 0, 0};
     size_t cap = 0;
     wm_status st = WM_OK;

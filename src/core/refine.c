@@ -242,8 +242,18 @@ typedef struct
 /* The shortest side piece grading makes at an end of the side edge, where
  * the room always shrinks to nothing: 8 pixels (shorter ones added
  * triangles on the bundled extracts and synthetic scenes and cured no more
- * of them) ... */
-#define GRADE_MIN (8 * (int64_t)WM_Q)
+ * of them), at SIMPLIFY below a quarter pixel 32 times SIMPLIFY, down to a
+ * pixel: the shore's edges next to the side are that much shorter (at
+ * SIMPLIFY=0 one per cell; 8-pixel pieces left 66 triangles below 20
+ * degrees in four blocks of the synthetic L1, 1-pixel ones 14, for as many
+ * triangles) ... */
+static int64_t grade_min(const wm_refine_opts *o)
+{
+    const double g = 32.0 * o->simplify;
+    return g >= 8.0 * WM_Q ? 8 * (int64_t)WM_Q
+           : g > WM_Q      ? (int64_t)g
+                           : (int64_t)WM_Q;
+}
 /* ... and elsewhere: 1/16 pixel (a shore running along the side a
  * fraction of a pixel inside the block: pieces of a pixel left triangles
  * of 4-8 degrees there on the synthetic L3) */
@@ -358,18 +368,16 @@ static int64_t land_gap(const wm_side_ends *e, int s, int32_t p, int dir)
 }
 
 /* The shortest piece grading makes at an end of a side edge whose land
- * gap along the side to the next water is gap (0: none): GRADE_MIN, or
- * half the gap where that is less, down to GRADE_INNER. A land notch a
+ * gap along the side to the next water is gap (0: none): most (grade_min),
+ * or half the gap where that is less, down to GRADE_INNER. A land notch a
  * fraction of a pixel wide at the side (a speck of land between two
  * water pieces reaching the side) has shore edges that short; a piece of
  * several pixels next to it, which refinement may not split, left
  * triangles of 2-7 degrees on the synthetic L1. */
-static int64_t end_min(int64_t gap)
+static int64_t end_min(int64_t most, int64_t gap)
 {
     const int64_t h = gap / 2;
-    return gap <= 0 || h >= GRADE_MIN ? GRADE_MIN
-           : h > GRADE_INNER          ? h
-                                      : GRADE_INNER;
+    return gap <= 0 || h >= most ? most : h > GRADE_INNER ? h : GRADE_INNER;
 }
 
 /* Balances the pieces e0 < cut[0] < ... < e1 of a side edge: a piece
@@ -378,15 +386,15 @@ static int64_t end_min(int64_t gap)
  * so a long piece next to a short one (grading halved a piece where the
  * shore comes near the side, not its neighbour) leaves a skinny triangle
  * on it. A piece ending at a block corner (lo or hi, the square's ends
- * along the side) is balanced against a piece of GRADE_MIN / 2 assumed
- * beyond the corner (what grading usually leaves at an end; the side
- * across the corner, which this side cannot see, is balanced alike), so
- * it is at most 16 pixels long. The result depends on the pieces and the
- * corners alone (passes in ascending global order), so both blocks sharing the
- * side find the same points. (A ratio of 2 cured no more triangles on the
+ * along the side) is balanced against a piece of `out` assumed beyond
+ * the corner (half of grade_min: what grading usually leaves at an end;
+ * the side across the corner, which this side cannot see, is balanced
+ * alike), so it is at most 16 pixels long. The result depends on the pieces and
+ * the corners alone (passes in ascending global order), so both blocks sharing
+ * the side find the same points. (A ratio of 2 cured no more triangles on the
  * synthetic L1 and L3 and added 4-6 % of them.) */
 static int balance_side(lbuf *cut, int64_t e0, int64_t e1, int64_t lo,
-                        int64_t hi)
+                        int64_t hi, int64_t out)
 {
     lbuf p = {NULL, 0, 0}, q = {NULL, 0, 0};
     int ok = lpush(&p, e0);
@@ -400,7 +408,6 @@ static int balance_side(lbuf *cut, int64_t e0, int64_t e1, int64_t lo,
         for (size_t i = 0; ok && i + 1 < p.n; i++)
         {
             const int64_t len = p.a[i + 1] - p.a[i];
-            const int64_t out = GRADE_MIN / 2; /* beyond a corner */
             const int64_t l = i > 0          ? p.a[i] - p.a[i - 1]
                               : p.a[i] == lo ? out
                                              : len;
@@ -447,8 +454,10 @@ static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
     const int grade = r->o->min_angle > 0 && r->o->room;
     const wm_side_ends *ends = r->o->ends;
     const int s = side_of(a, b);
-    const side_span e = {e0, e1, end_min(ends ? land_gap(ends, s, p0, -1) : 0),
-                         end_min(ends ? land_gap(ends, s, p1, +1) : 0)};
+    const int64_t most = grade_min(r->o);
+    const side_span e = {e0, e1,
+                         end_min(most, ends ? land_gap(ends, s, p0, -1) : 0),
+                         end_min(most, ends ? land_gap(ends, s, p1, +1) : 0)};
     lbuf cut = {NULL, 0, 0};
     int ok = 1;
     for (int64_t u = e0; ok && u < e1;)
@@ -461,7 +470,8 @@ static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
              (v == e1 || lpush(&cut, v));
         u = v;
     }
-    ok = ok && (!grade || balance_side(&cut, e0, e1, o, o + r->o->side));
+    ok = ok &&
+         (!grade || balance_side(&cut, e0, e1, o, o + r->o->side, most / 2));
     for (size_t i = 0; ok && i < cut.n; i++)
     {
         const int64_t g = pa < pb ? cut.a[i] : cut.a[cut.n - 1 - i];

@@ -47,6 +47,9 @@ extern "C"
          *  which bounds the pieces at a side edge's end by the land gap to
          *  the next water along the side; NULL: no such bound */
         const wm_side_ends *ends;
+        /** with room: SIMPLIFY, lattice units (below a quarter pixel the
+         *  pieces at a side edge's ends are graded shorter) */
+        double simplify;
     } wm_refine_opts;
 
     /** What refining left undone (statistics, summed over polygons). */
@@ -74,7 +77,8 @@ extern "C"
      * max_edge, at the global lattice multiples of max_edge along the side;
      * with min_angle and o->room, each piece is halved (at its global
      * midpoint, rounded down) while it is longer than its room at that
-     * midpoint and than 8 pixels at an end of the side edge (half the land
+     * midpoint and than 8 pixels at an end of the side edge (32 times
+     * o->simplify when that is less, down to a pixel; half the land
      * gap to the next water along the side where that is less, down to
      * 1/16 pixel: o->ends), 1/16 pixel elsewhere: no point of the inputs' shore
      * then lies within half the room of its diametral circle, so refinement
