@@ -389,8 +389,9 @@ static int64_t end_min(int64_t most, int64_t gap)
  * along the side) is balanced against a piece of `out` assumed beyond
  * the corner (half of grade_min: what grading usually leaves at an end;
  * the side across the corner, which this side cannot see, is balanced
- * alike), so it is at most 16 pixels long. The result depends on the pieces and
- * the corners alone (passes in ascending global order), so both blocks sharing
+ * alike), so it is at most twice grade_min long (16 pixels at SIMPLIFY
+ * of a quarter pixel or more). The result depends on the pieces and the
+ * corners alone (passes in ascending global order), so both blocks sharing
  * the side find the same points. (A ratio of 2 cured no more triangles on the
  * synthetic L1 and L3 and added 4-6 % of them.) */
 static int balance_side(lbuf *cut, int64_t e0, int64_t e1, int64_t lo,
