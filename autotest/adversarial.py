@@ -428,10 +428,9 @@ def _mosaic(rng, px):
     edges inside the union, or one time in four lie a gap of 0.01-1.5 px
     apart (a land strip); one to three rivers cross it, some ending inside."""
     from shapely.geometry import LineString as _Line
-    from shapely.geometry import Polygon as _Poly
     from shapely.ops import split
     d = rng.uniform(12.0, 40.0)
-    pieces = [_Poly(_ngon(rng, 0.0, 0.0, d, rng.randint(5, 12), rough=0.2))]
+    pieces = [Polygon(_ngon(rng, 0.0, 0.0, d, rng.randint(5, 12), rough=0.2))]
     for _ in range(rng.choice((1, 1, 2))):
         a = rng.uniform(0.0, math.pi)
         off = rng.uniform(-0.2, 0.2) * d
@@ -504,10 +503,9 @@ def _spike(rng, px):
     half-angle 0.3-15 degrees, 2-15 m long), a notch of land cut into it as
     sharp, or two lobes joined by a channel 0.05-1.5 px wide; half the time
     a river passing by or through."""
-    from shapely.geometry import Polygon as _Poly
     kind = rng.choice(('spike', 'notch', 'neck'))
     d = rng.uniform(10.0, 30.0)
-    lobe = _Poly(_ngon(rng, 0.0, 0.0, d, rng.randint(5, 10), rough=0.15))
+    lobe = Polygon(_ngon(rng, 0.0, 0.0, d, rng.randint(5, 10), rough=0.15))
     a = rng.uniform(0.0, 2.0 * math.pi)
     u, n = (math.cos(a), math.sin(a)), (-math.sin(a), math.cos(a))
     half = math.radians(_log_uniform(rng, 0.3, 15.0))
@@ -518,18 +516,18 @@ def _spike(rng, px):
         # length (notch, r0 outside the lobe), base 2 length tan(half) wide
         r0 = 0.5 * d * (0.7 if kind == 'spike' else 1.4)
         tip = r0 + length if kind == 'spike' else r0 - length - 0.3 * d
-        w = (abs(tip - r0)) * math.tan(half)
-        tri = _Poly([(r0 * u[0] + w * n[0], r0 * u[1] + w * n[1]),
+        w = abs(tip - r0) * math.tan(half)
+        tri = Polygon([(r0 * u[0] + w * n[0], r0 * u[1] + w * n[1]),
                      (tip * u[0], tip * u[1]),
                      (r0 * u[0] - w * n[0], r0 * u[1] - w * n[1])])
         shape = lobe.union(tri) if kind == 'spike' else lobe.difference(tri)
         meta.update(half_angle_deg=math.degrees(half), length_m=abs(tip - r0))
     else:
         gap = _log_uniform(rng, 0.05, 1.5) * px
-        other = _Poly(_ngon(rng, (d + length) * u[0], (d + length) * u[1], d,
+        other = Polygon(_ngon(rng, (d + length) * u[0], (d + length) * u[1], d,
                             rng.randint(5, 10), rough=0.15))
         h = gap / 2.0
-        chan = _Poly([(h * n[0], h * n[1]),
+        chan = Polygon([(h * n[0], h * n[1]),
                       ((d + length) * u[0] + h * n[0], (d + length) * u[1] + h * n[1]),
                       ((d + length) * u[0] - h * n[0], (d + length) * u[1] - h * n[1]),
                       (-h * n[0], -h * n[1])])
@@ -780,7 +778,8 @@ def topology_figures(drv, orc, block_size, px, orc_lost=None):
         holes overlap meets the lake's water at their crossings, and the
         output may join it to that water there, the hole around it one
         ring); pinched: how many rings had a pinch point (so excused);
-      ring_diff: sum over blocks and kinds of |output rings - oracle rings|;
+      ring_diff: sum over blocks and kinds of |output rings - oracle rings|
+        (the oracle's rings below the lattice, orc_lost, left out);
       speck_at / lost_at: up to 5 (kind, x, y) each.
     orc_lost (default orc): the oracle whose rings may be lost (resolvable():
     a feature the lattice does not resolve need not be kept, but it may)."""
@@ -813,7 +812,7 @@ def topology_figures(drv, orc, block_size, px, orc_lost=None):
             if len(out['lost_at']) < 5:
                 out['lost_at'].append((o.kind,) + o.center())
     cd = Counter((r.block, r.kind) for r in dr)
-    co = Counter((r.block, r.kind) for r in orr)
+    co = Counter((r.block, r.kind) for r in lost_rings)
     out['ring_diff'] = sum(abs(cd[k] - co[k]) for k in set(cd) | set(co))
     return out
 

@@ -348,16 +348,13 @@ def test_hausdorff(scene):
 # (mosaic seed 135325 at 0.5:64, one island 1.3 px long too many, H 0.22
 # px; not listed: it fails).
 RING_SCENES = ['twins-135011@1:128', 'twins-135410@1:128']
-# The exact union of mosaic seed 131073 has a land triangle below the
-# lattice (adversarial.resolvable) that the output rightly drops.
-RING_EXCUSED = {'mosaic-131073'}
 
 
-@pytest.mark.parametrize('scene', [s for s in SCENE_IDS if s not in RING_EXCUSED] + RING_SCENES,
-                         indirect=True)
+@pytest.mark.parametrize('scene', SCENE_IDS + RING_SCENES, indirect=True)
 def test_rings_one_for_one(scene):
     """SIMPLIFY=0: as many land and water rings per block as the exact
-    union has: no feature cut in two or two joined, which neither the
+    union has (but for those below the lattice, adversarial.resolvable):
+    no feature cut in two or two joined, which neither the
     Hausdorff distance nor the speck and lost counts need to show (a
     junction of land strips cut into an island 1.3 px long measured 0.22
     px)."""

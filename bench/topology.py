@@ -43,7 +43,8 @@ family:
                themselves at a point: the even-odd parts of an invalid lake
                whose holes overlap), so excused as above
   ring diff    sum over blocks and ring kinds of |output rings - oracle
-               rings| (dashed rivers, rows of holes, merged strips)
+               rings| (dashed rivers, rows of holes, merged strips; the
+               oracle's rings below the lattice left out)
   symdiff      area of the symmetric difference with the oracle, m², summed
                over the family's scenes (and relative to their oracle area)
   area max     largest |area - oracle area| / oracle area over the scenes
