@@ -1024,11 +1024,11 @@ static int water_at(const work *w, size_t t, int64_t X, int64_t Y)
 
 /* Whether the water at sample (X, Y) of a block line (vertical: a side
  * between blocks left and right of it; horizontal: below and above),
- * whose value is 0, reaches into every block holding the sample: the
- * points a lattice unit across the line are water, or at a block corner
- * (both) the four a unit diagonally into the four blocks (two lakes
- * touching there along one edge leave the axis points all water and a
- * quadrant dry). */
+ * whose value settle_lines takes for 0, reaches into every block holding
+ * the sample: the points a lattice unit across the line are water, or at a
+ * block corner (both) the four a unit diagonally into the four blocks (two
+ * lakes touching there along one edge leave the axis points all water and
+ * a quadrant dry). */
 static int water_across(const work *w, size_t t, int64_t X, int64_t Y,
                         int vertical, int horizontal)
 {
@@ -1047,7 +1047,9 @@ static int32_t first_line(int64_t g0, int32_t n)
 }
 
 /* Samples on a block line (a global row or column that is a multiple of
- * the block's n) whose value is exactly 0 lie on a lake edge or a bank.
+ * the block's n) valued 0, or below it by no more than WM_COINCIDE (the
+ * inputs' rounding to the lattice: a bank on the line at 0.3 m pixels is
+ * 1e-13 pixel off it), lie on a lake edge or a bank.
  * Water is closed, so such a sample is water, which is right inside a
  * block (a boundary through samples moves by a lattice unit) but not on a
  * block side where the water lies on one side only: the block across
@@ -1059,6 +1061,8 @@ static int32_t first_line(int64_t g0, int32_t n)
  * side. Where water lies on both sides (two lake polygons sharing an edge
  * along the side), it stays water and the union stays seamless
  * (water_across; probe.c's side_rule does the same between samples). */
+#define SETTLE ((float)(WM_COINCIDE / WM_Q)) /* pixels */
+
 static wm_status settle_lines(work *w, size_t t, float *val)
 {
     const wm_field *f = w->f;
@@ -1077,7 +1081,7 @@ static wm_status settle_lines(work *w, size_t t, float *val)
                 const int vertical = (gx + i) % n == 0;
                 const int horizontal = (gy + j) % n == 0;
                 float *v = &val[j * TS1 + i];
-                if (*v != 0.0f || (pass && vertical))
+                if (!(*v <= 0.0f && *v > -SETTLE) || (pass && vertical))
                     continue;
                 if (!w->lakes.s && w->npolys &&
                     wm_lake_bands_build(&w->lakes, w->s, w->polys, w->npolys) !=

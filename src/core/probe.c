@@ -51,10 +51,9 @@ struct wm_probe_toggle
 #define DCELL (16 * WM_Q)
 #define DREACH WM_PROBE_REACH
 #define WIDE 1024
-/* Two boundaries closer than this (lattice units) along a segment are one
- * (two inputs sharing it, or rounding); any farther apart bound a feature,
- * kept at least a lattice unit wide so that it stays whole to its tip. */
-#define WM_COINCIDE 1e-6
+/* Two boundaries closer than WM_COINCIDE (scene.h) along a segment are
+ * one; any farther apart bound a feature, kept at least a lattice unit wide
+ * so that it stays whole to its tip. */
 
 /* Height of a band of the ray index: 4 sample rows. */
 #define RBAND (4 * WM_Q)

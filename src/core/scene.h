@@ -25,6 +25,13 @@ extern "C"
  *  a 65536-pixel block stays within 2^24 local units (see lattice.h). */
 #define WM_Q 256
 
+/** Two boundaries closer than this (lattice units) are one: two inputs
+ *  sharing it, or the rounding of the inputs to the lattice (a bank on a
+ *  block line at 0.3 m pixels lies 1e-13 pixel off it). probe.c merges
+ *  such crossings along a segment; field.c settles samples so near a
+ *  block line's boundary as on it. */
+#define WM_COINCIDE 1e-6
+
     /** Floor division (rounds towards -infinity), b > 0. Block and tile
      *  indices of negative coordinates need it. */
     static inline int64_t wm_floordiv(int64_t a, int64_t b)
