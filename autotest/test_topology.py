@@ -348,15 +348,15 @@ def test_hausdorff(scene):
 
 # Scenes whose rings the output must match one for one (per block and
 # kind): an island whose neck, about a lattice unit wide, crosses a
-# subdivision leaf (twins seeds 135011 and 135410 at 1:128). A leaf pairs
-# its crossings so that no two on one side are joined (a strip crosses the
-# leaf); reading the union's connectivity at points a quarter unit apart
-# instead cut both necks into two islands (the points miss a neck thinner
-# than their spacing), while it mended a junction of four land strips 3
-# units wide that the rule cuts where a water wedge's tip lies in the leaf
-# (mosaic seed 135325 at 0.5:64, one island 1.3 px long too many, H 0.22
-# px; not listed: it fails).
-RING_SCENES = ['twins-135011@1:128', 'twins-135410@1:128']
+# subdivision leaf (twins seeds 135011 and 135410 at 1:128), which reading
+# the union's connectivity at points a quarter unit apart cut (the points
+# miss a neck thinner than their spacing); and junctions of land strips 3
+# units wide where a water wedge's tip lies in the leaf, which the leaf's
+# pairing rule alone cut into an island (mosaic seeds 135325 at 0.5:64,
+# 1.3 px, H 0.22 px, and 137127 at 2:256), mended by subpixel.c's
+# contradicted().
+RING_SCENES = ['twins-135011@1:128', 'twins-135410@1:128', 'mosaic-135325',
+               'mosaic-137127@2:256']
 
 
 @pytest.mark.parametrize('scene', SCENE_IDS + RING_SCENES, indirect=True)

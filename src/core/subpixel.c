@@ -74,6 +74,11 @@
 /* Subdivision depth bound (a cell is 256 units: 7 halvings of each side
  * reach parts 3 units wide). */
 #define MAXDEPTH 32
+/* How deep (lattice units) the union must contradict a leaf's pairing to
+ * turn it, and how far apart its crossings must lie along its boundary
+ * (contradicted()). */
+#define LEAF_MARGIN 0.5
+#define LEAF_ARC 2
 /* river caps narrower than this radius get their tips seeded (lattice
  * units): a wider cap's arc stays within a quarter pixel of its chords */
 #define THIN_CAP (1.5 * WM_Q)
@@ -1139,12 +1144,10 @@ static void sub_side(const rect *q, int s, int32_t lo, int32_t hi,
 
 static int run_rect(walker *w, const rect *q, int depth);
 
-/* Emits a -> b, or a -> (a point one unit inside) -> b when both are on
- * side s of q (the segment would run along the side). */
-static int emit_pair(walker *w, const rect *q, const xing *a, const xing *b)
+/* The point one unit inside side s of q, midway between crossings a and b
+ * of that side: where the path joining them turns. */
+static wm_pt detour(const rect *q, const xing *a, const xing *b)
 {
-    if (a->side != b->side)
-        return w->emit(w->user, a->p, b->p);
     wm_pt m = {(int32_t)(((int64_t)a->p.x + b->p.x) / 2),
                (int32_t)(((int64_t)a->p.y + b->p.y) / 2)};
     switch (a->side)
@@ -1162,6 +1165,16 @@ static int emit_pair(walker *w, const rect *q, const xing *a, const xing *b)
         m.x = q->x0 + 1;
         break;
     }
+    return m;
+}
+
+/* Emits a -> b, or a -> detour() -> b when both are on one side of q (the
+ * segment would run along the side). */
+static int emit_pair(walker *w, const rect *q, const xing *a, const xing *b)
+{
+    if (a->side != b->side)
+        return w->emit(w->user, a->p, b->p);
+    const wm_pt m = detour(q, a, b);
     return w->emit(w->user, a->p, m) && w->emit(w->user, m, b->p);
 }
 
@@ -1179,10 +1192,80 @@ static int pair_all(walker *w, const rect *q, const xing *x, int k, int joined)
     return 1;
 }
 
+/* The exact signed distance (lattice units) at the point midway between
+ * the middles of the two paths pair_all() draws for the four crossings x
+ * (joined or not; a path's middle is its detour's turn or its midpoint):
+ * a point of the region between them, which joins the water arcs of q's
+ * boundary (joined) or its land arcs. */
+static double between_paths(walker *w, const rect *q, const xing *x, int joined)
+{
+    double sx = 0, sy = 0;
+    for (int i = 0; i < 4; i++)
+        if (x[i].out)
+        {
+            const xing *a = &x[i], *b = &x[joined ? (i + 1) % 4 : (i + 3) % 4];
+            const wm_pt m = a->side == b->side ? detour(q, a, b) : a->p;
+            const wm_pt n = a->side == b->side ? m : b->p;
+            sx += (double)m.x + n.x;
+            sy += (double)m.y + n.y;
+        }
+    return wm_probe_distance(w->probe, sx / 4, sy / 4, WM_PROBE_REACH);
+}
+
+/* The position of crossing p of side `side` along q's boundary,
+ * counter-clockwise from (x0, y0). */
+static int64_t along(const rect *q, wm_pt p, int side)
+{
+    const int64_t W = q->x1 - q->x0, H = q->y1 - q->y0;
+    switch (side)
+    {
+    case SB:
+        return p.x - q->x0;
+    case SR:
+        return W + (p.y - q->y0);
+    case ST:
+        return W + H + (q->x1 - p.x);
+    default:
+        return 2 * W + H + (q->y1 - p.y);
+    }
+}
+
+/* Whether the union contradicts the pairing `joined` of a leaf's four
+ * crossings x and bears out the other: the region between the pairing's
+ * paths is of the other class LEAF_MARGIN units deep or more at the point
+ * between_paths() takes, and the other pairing's point is of its class.
+ * Only where consecutive crossings lie LEAF_ARC units apart or more along
+ * q's boundary: a sliver thinner than a unit has its crossings set a unit
+ * apart, up to about a unit off where it lies (twins seeds 135011 and
+ * 135410 at 1 m), and no point tells where. */
+static int contradicted(walker *w, const rect *q, const xing *x, int joined)
+{
+    const int64_t per = 2 * ((int64_t)(q->x1 - q->x0) + (q->y1 - q->y0));
+    for (int i = 0; i < 4; i++)
+    {
+        const int64_t a = along(q, x[i].p, x[i].side);
+        const int64_t b = along(q, x[(i + 1) % 4].p, x[(i + 1) % 4].side);
+        if ((b - a + per) % per < LEAF_ARC)
+            return 0;
+    }
+    const double d = between_paths(w, q, x, joined);
+    if (joined ? d < LEAF_MARGIN : d > -LEAF_MARGIN)
+        return 0;
+    const double e = between_paths(w, q, x, !joined);
+    return joined ? e > 0 : e <= 0;
+}
+
 /* Pairs the crossings of a rectangle too small to divide: each out
  * crossing with the next in one counter-clockwise (the water corners
  * joined) or the previous (separated); the pairing with fewer pairs on one
- * side wins, the class of the centre decides a tie. When all crossings lie
+ * side wins, the class of the centre decides a tie. Of four crossings,
+ * the other pairing is taken where the union contradicts this one
+ * (contradicted(): a water wedge whose tip lies in the leaf, entering and
+ * leaving it through one side, next to land strips 3 units wide: mosaic
+ * seed 135325 at 0.5 m, such a junction cut into an island), unless it
+ * pairs two crossings on each of two sides (the rule never does: the two
+ * detours may meet at one point, which chains cannot link). When all
+ * crossings lie
  * on one side, the pairing in which no pair wraps around the rectangle
  * wins: the wrapping pair's path, drawn one unit inside the side as
  * emit_pair() draws it, would cross the others'. */
@@ -1207,6 +1290,8 @@ static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
     else
         joined = wm_probe_distance(w->probe, (q->x0 + q->x1) / 2.0,
                                    (q->y0 + q->y1) / 2.0, WM_PROBE_REACH) <= 0;
+    if (k == 4 && same[joined] <= 1 && contradicted(w, q, x, joined))
+        joined = !joined;
     return pair_all(w, q, x, k, joined);
 }
 
