@@ -353,10 +353,12 @@ def test_hausdorff(scene):
 # miss a neck thinner than their spacing); and junctions of land strips 3
 # units wide where a water wedge's tip lies in the leaf, which the leaf's
 # pairing rule alone cut into an island (mosaic seeds 135325 at 0.5:64,
-# 1.3 px, H 0.22 px, and 137127 at 2:256), mended by subpixel.c's
-# contradicted().
+# 1.3 px, H 0.22 px, 137127 at 2:256, 136951 where the tip enters a unit
+# wide), and a lake's thin tip entering a leaf of six crossings through one
+# side and leaving through two (mosaic seed 136904), mended by subpixel.c's
+# pair_leaf.
 RING_SCENES = ['twins-135011@1:128', 'twins-135410@1:128', 'mosaic-135325',
-               'mosaic-137127@2:256']
+               'mosaic-137127@2:256', 'mosaic-136951', 'mosaic-136904']
 
 
 @pytest.mark.parametrize('scene', SCENE_IDS + RING_SCENES, indirect=True)

@@ -79,6 +79,8 @@
  * (contradicted()). */
 #define LEAF_MARGIN 0.5
 #define LEAF_ARC 2
+/* Most crossings of a leaf whose every pairing is tried (pair_many()). */
+#define LEAF_K 8
 /* river caps narrower than this radius get their tips seeded (lattice
  * units): a wider cap's arc stays within a quarter pixel of its chords */
 #define THIN_CAP (1.5 * WM_Q)
@@ -1230,6 +1232,21 @@ static int64_t along(const rect *q, wm_pt p, int side)
     }
 }
 
+/* Whether consecutive crossings of x[0 .. k) lie LEAF_ARC units apart or
+ * more along q's boundary. */
+static int arcs_apart(const rect *q, const xing *x, int k)
+{
+    const int64_t per = 2 * ((int64_t)(q->x1 - q->x0) + (q->y1 - q->y0));
+    for (int i = 0; i < k; i++)
+    {
+        const int64_t a = along(q, x[i].p, x[i].side);
+        const int64_t b = along(q, x[(i + 1) % k].p, x[(i + 1) % k].side);
+        if ((b - a + per) % per < LEAF_ARC)
+            return 0;
+    }
+    return 1;
+}
+
 /* Whether the union contradicts the pairing `joined` of a leaf's four
  * crossings x and bears out the other: the region between the pairing's
  * paths is of the other class LEAF_MARGIN units deep or more at the point
@@ -1240,14 +1257,8 @@ static int64_t along(const rect *q, wm_pt p, int side)
  * 135410 at 1 m), and no point tells where. */
 static int contradicted(walker *w, const rect *q, const xing *x, int joined)
 {
-    const int64_t per = 2 * ((int64_t)(q->x1 - q->x0) + (q->y1 - q->y0));
-    for (int i = 0; i < 4; i++)
-    {
-        const int64_t a = along(q, x[i].p, x[i].side);
-        const int64_t b = along(q, x[(i + 1) % 4].p, x[(i + 1) % 4].side);
-        if ((b - a + per) % per < LEAF_ARC)
-            return 0;
-    }
+    if (!arcs_apart(q, x, 4))
+        return 0;
     const double d = between_paths(w, q, x, joined);
     if (joined ? d < LEAF_MARGIN : d > -LEAF_MARGIN)
         return 0;
@@ -1255,20 +1266,304 @@ static int contradicted(walker *w, const rect *q, const xing *x, int joined)
     return joined ? e > 0 : e <= 0;
 }
 
+/* The arc of a leaf's boundary holding position s (along()): i when it
+ * lies between crossings i and i + 1 (at pos[]), -1 on a crossing. */
+static int arc_of(const int64_t *pos, int64_t s)
+{
+    int i = 3;
+    for (int j = 0; j < 4; j++)
+    {
+        if (s == pos[j])
+            return -1;
+        if (s > pos[j])
+            i = j;
+    }
+    return i;
+}
+
+/* Whether the exact search finds lattice line from P (length L, along x or
+ * y), whose end classes are c0 and c1, wholly of class c0; -1 when out of
+ * memory. */
+static int line_of_one_class(walker *w, wm_pt P, int vertical, int32_t L,
+                             int c0, int c1)
+{
+    if (c0 != c1)
+        return 0;
+    int32_t off[2];
+    const int n = wm_probe_crossings(w->probe, P, vertical, L, c0, &c1, off, 2);
+    return n < 0 ? -1 : n == 0;
+}
+
+/* joins[c]: whether an interior lattice line of leaf q lies wholly in
+ * class c (1: water) from one arc of that class to another, by the exact
+ * search that divides rectangles (a sliver crossing it is found, kept a
+ * unit wide): the union joins those arcs inside the leaf. Returns 0 when
+ * out of memory. */
+static int lines_join(walker *w, const rect *q, const xing *x, int *joins)
+{
+    int64_t pos[4];
+    for (int i = 0; i < 4; i++)
+        pos[i] = along(q, x[i].p, x[i].side);
+    joins[0] = joins[1] = 0;
+    for (int vertical = 0; vertical < 2; vertical++)
+    {
+        /* sides the line starts and ends on */
+        const int s0 = vertical ? SB : SL, s1 = vertical ? ST : SR;
+        const int32_t lo = vertical ? q->x0 : q->y0,
+                      hi = vertical ? q->x1 : q->y1;
+        for (int32_t v = lo + 1; v < hi; v++)
+        {
+            if (taken(q, s0, v) || taken(q, s1, v))
+                continue;
+            const int c0 = class_at(q, s0, v), c1 = class_at(q, s1, v);
+            const wm_pt P = vertical ? (wm_pt){v, q->y0} : (wm_pt){q->x0, v};
+            const wm_pt E = vertical ? (wm_pt){v, q->y1} : (wm_pt){q->x1, v};
+            const int one = line_of_one_class(
+                w, P, vertical, vertical ? q->y1 - q->y0 : q->x1 - q->x0, c0,
+                c1);
+            if (one < 0)
+                return 0;
+            const int a = arc_of(pos, along(q, P, s0)),
+                      b = arc_of(pos, along(q, E, s1));
+            if (one && a >= 0 && b >= 0 && a != b)
+                joins[c0] = 1;
+        }
+    }
+    return 1;
+}
+
+/* Emits each out crossing of x[0 .. k) with its mate. */
+static int pair_mates(walker *w, const rect *q, const xing *x, int k,
+                      const int *mate)
+{
+    for (int i = 0; i < k; i++)
+        if (x[i].out && !emit_pair(w, q, &x[i], &x[mate[i]]))
+            return 0;
+    return 1;
+}
+
+/* Appends to poly (*n points) the corners of q strictly between boundary
+ * positions a and b (along(), counter-clockwise, wrapping), then b's
+ * point p. */
+static void arc_to(const rect *q, int64_t a, int64_t b, wm_pt p, wm_pt *poly,
+                   int *n)
+{
+    const int64_t W = q->x1 - q->x0, H = q->y1 - q->y0, per = 2 * (W + H);
+    const int64_t cpos[4] = {0, W, W + H, 2 * W + H};
+    const wm_pt c[4] = {
+        {q->x0, q->y0}, {q->x1, q->y0}, {q->x1, q->y1}, {q->x0, q->y1}};
+    const int64_t len = (b - a + per) % per;
+    /* the corners by their distance from a */
+    int order[4] = {0, 1, 2, 3};
+    for (int i = 1; i < 4; i++)
+        for (int j = i; j > 0 && (cpos[order[j]] - a + per) % per <
+                                     (cpos[order[j - 1]] - a + per) % per;
+             j--)
+        {
+            const int t = order[j];
+            order[j] = order[j - 1];
+            order[j - 1] = t;
+        }
+    for (int i = 0; i < 4; i++)
+    {
+        const int64_t d = (cpos[order[i]] - a + per) % per;
+        if (d > 0 && d < len)
+            poly[(*n)++] = c[order[i]];
+    }
+    poly[(*n)++] = p;
+}
+
+/* Samples of a leaf's exact class for scoring pairings: the points half
+ * a unit apart inside it, with the union's signed distance there. */
+#define LEAF_SAMPLES 256
+typedef struct
+{
+    double x[LEAF_SAMPLES], y[LEAF_SAMPLES], d[LEAF_SAMPLES];
+    int n;
+} leaf_samples;
+
+static void sample_leaf(walker *w, const rect *q, leaf_samples *ls)
+{
+    ls->n = 0;
+    for (double y = q->y0 + 0.25; y < q->y1; y += 0.5)
+        for (double x = q->x0 + 0.25; x < q->x1; x += 0.5)
+            if (ls->n < LEAF_SAMPLES)
+            {
+                ls->x[ls->n] = x;
+                ls->y[ls->n] = y;
+                ls->d[ls->n] =
+                    wm_probe_distance(w->probe, x, y, WM_PROBE_REACH);
+                ls->n++;
+            }
+}
+
+/* Whether (px, py) lies inside polygon poly (n points; even-odd). */
+static int in_poly(const wm_pt *poly, int n, double px, double py)
+{
+    int inside = 0;
+    for (int j = 0; j < n; j++)
+    {
+        const wm_pt u = poly[j], v = poly[(j + 1) % n];
+        if ((u.y > py) != (v.y > py) &&
+            px < u.x + (py - u.y) * (v.x - u.x) / (double)(v.y - u.y))
+            inside = !inside;
+    }
+    return inside;
+}
+
+/* How many samples of ls the pairing `mate` of leaf q's k crossings x
+ * puts in a region (bounded by arcs of one class and the paths
+ * emit_pair() draws) of the class they are not, LEAF_MARGIN units deep or
+ * more. */
+static int contradictions(const rect *q, const xing *x, int k, const int *mate,
+                          const leaf_samples *ls)
+{
+    int64_t pos[LEAF_K];
+    for (int i = 0; i < k; i++)
+        pos[i] = along(q, x[i].p, x[i].side);
+    unsigned seen = 0;
+    int n_bad = 0;
+    for (int i0 = 0; i0 < k; i0++)
+    {
+        if (seen >> i0 & 1)
+            continue;
+        /* walk the region from arc i0: along arc i, then the path from
+         * crossing i + 1 to its mate, whose arc follows */
+        wm_pt poly[6 * LEAF_K];
+        int n = 0;
+        for (int i = i0; !(seen >> i & 1);)
+        {
+            seen |= 1u << i;
+            const int e = (i + 1) % k, m = mate[e];
+            poly[n++] = x[i].p;
+            arc_to(q, pos[i], pos[e], x[e].p, poly, &n);
+            if (x[e].side == x[m].side)
+                poly[n++] = detour(q, &x[e], &x[m]);
+            i = m;
+        }
+        const int water = !x[i0].out;
+        for (int j = 0; j < ls->n; j++)
+            if ((water ? ls->d[j] >= LEAF_MARGIN : ls->d[j] <= -LEAF_MARGIN) &&
+                in_poly(poly, n, ls->x[j], ls->y[j]))
+                n_bad++;
+    }
+    return n_bad;
+}
+
+/* Pairs on one side in pairing `mate`. */
+static int same_side_pairs(const xing *x, const int *mate, int k)
+{
+    int n = 0;
+    for (int i = 0; i < k; i++)
+        n += i < mate[i] && x[i].side == x[mate[i]].side;
+    return n;
+}
+
+/* Whether pairs (a, b) and (c, d) of crossings interleave around the
+ * boundary (their paths would cross). */
+static int interleave(int a, int b, int c, int d)
+{
+    const int lo = a < b ? a : b, hi = a < b ? b : a;
+    return (lo < c && c < hi) != (lo < d && d < hi);
+}
+
+typedef struct
+{
+    const rect *q;
+    const xing *x;
+    int k;
+    const leaf_samples *ls;
+    int mate[LEAF_K], best[LEAF_K];
+    int best_bad, best_same;
+} pairings;
+
+/* Tries the pairings of the out crossings from `o` on with the in
+ * crossings not in `used` that cross no pair and have at most one pair on
+ * one side; keeps the one the union contradicts least (then the fewest
+ * pairs on one side, then the first). */
+static void try_pairings(pairings *t, int o, unsigned used)
+{
+    while (o < t->k && !t->x[o].out)
+        o++;
+    if (o == t->k)
+    {
+        const int same = same_side_pairs(t->x, t->mate, t->k);
+        if (same > 1)
+            return;
+        const int bad = contradictions(t->q, t->x, t->k, t->mate, t->ls);
+        if (t->best_bad < 0 || bad < t->best_bad ||
+            (bad == t->best_bad && same < t->best_same))
+        {
+            t->best_bad = bad;
+            t->best_same = same;
+            memcpy(t->best, t->mate, sizeof t->mate);
+        }
+        return;
+    }
+    for (int i = 0; i < t->k; i++)
+    {
+        if (t->x[i].out || (used >> i & 1))
+            continue;
+        int ok = 1;
+        for (int a = 0; a < o && ok; a++)
+            if (t->x[a].out)
+                ok = !interleave(a, t->mate[a], o, i);
+        if (!ok)
+            continue;
+        t->mate[o] = i;
+        t->mate[i] = o;
+        try_pairings(t, o + 1, used | 1u << i);
+    }
+}
+
+/* Pairs a leaf of 6 to LEAF_K crossings, LEAF_ARC units apart or more,
+ * whose pairing `joined` the union contradicts (contradictions(): samples
+ * half a unit apart that it puts in a region of the class they are not),
+ * the way it contradicts least among those that cross no pair and have at
+ * most one pair on one side. Returns 1 when done, 0 when out of memory,
+ * -1 when the rule's pairing stays. */
+static int pair_many(walker *w, const rect *q, const xing *x, int k, int joined)
+{
+    if (k < 6 || k > LEAF_K || !arcs_apart(q, x, k))
+        return -1;
+    leaf_samples *ls = malloc(sizeof *ls);
+    if (!ls)
+        return 0;
+    sample_leaf(w, q, ls);
+    pairings t = {q, x, k, ls, {0}, {0}, -1, 0};
+    for (int i = 0; i < k; i++)
+        if (x[i].out)
+        {
+            t.mate[i] = joined ? (i + 1) % k : (i + k - 1) % k;
+            t.mate[t.mate[i]] = i;
+        }
+    const int rule_bad = contradictions(q, x, k, t.mate, ls);
+    if (rule_bad > 0)
+        try_pairings(&t, 0, 0);
+    free(ls);
+    if (rule_bad == 0 || t.best_bad < 0 || t.best_bad >= rule_bad)
+        return -1;
+    return pair_mates(w, q, x, k, t.best);
+}
+
 /* Pairs the crossings of a rectangle too small to divide: each out
  * crossing with the next in one counter-clockwise (the water corners
  * joined) or the previous (separated); the pairing with fewer pairs on one
- * side wins, the class of the centre decides a tie. Of four crossings,
- * the other pairing is taken where the union contradicts this one
- * (contradicted(): a water wedge whose tip lies in the leaf, entering and
- * leaving it through one side, next to land strips 3 units wide: mosaic
- * seed 135325 at 0.5 m, such a junction cut into an island), unless it
- * pairs two crossings on each of two sides (the rule never does: the two
- * detours may meet at one point, which chains cannot link). When all
- * crossings lie
- * on one side, the pairing in which no pair wraps around the rectangle
- * wins: the wrapping pair's path, drawn one unit inside the side as
- * emit_pair() draws it, would cross the others'. */
+ * side wins, the class of the centre decides a tie. The union may then
+ * overrule it, never for a pairing with two pairs on one side each (the
+ * rule never takes one: their two detours may meet at one point, which
+ * chains cannot link). Of four crossings: where an interior lattice line
+ * lies wholly in one class from one arc to another (lines_join(): a
+ * wedge's tip entering a unit wide, mosaic seed 136951 at 0.5 m), the
+ * pairing that keeps them in one region; else where the point between the
+ * paths contradicts the rule's (contradicted(): a water wedge's tip in
+ * the leaf next to land strips 3 units wide, mosaic seed 135325), the
+ * other. Of six to LEAF_K, which a uniform pairing may not fit, the pairing
+ * the union contradicts least (pair_many(): a lake's thin tip entering
+ * through one side and leaving through two, mosaic seed 136904). When all
+ * crossings lie on one side, the pairing in which no pair wraps around the
+ * rectangle wins: the wrapping pair's path, drawn one unit inside the side
+ * as emit_pair() draws it, would cross the others'. */
 static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
 {
     int one_side = 1;
@@ -1290,9 +1585,20 @@ static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
     else
         joined = wm_probe_distance(w->probe, (q->x0 + q->x1) / 2.0,
                                    (q->y0 + q->y1) / 2.0, WM_PROBE_REACH) <= 0;
-    if (k == 4 && same[joined] <= 1 && contradicted(w, q, x, joined))
-        joined = !joined;
-    return pair_all(w, q, x, k, joined);
+    if (k == 4)
+    {
+        int joins[2];
+        if (!lines_join(w, q, x, joins))
+            return 0;
+        /* same[!p]: pairs on one side of pairing p (joined or not) */
+        if (joins[0] != joins[1] && same[joins[0]] <= 1)
+            joined = joins[1];
+        else if (joins[0] == joins[1] && same[joined] <= 1 &&
+                 contradicted(w, q, x, joined))
+            joined = !joined;
+    }
+    const int many = pair_many(w, q, x, k, joined);
+    return many >= 0 ? many : pair_all(w, q, x, k, joined);
 }
 
 /* Crossings of the dividing segment from P (length L, along x or y) with
