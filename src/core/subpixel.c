@@ -1353,22 +1353,16 @@ static void arc_to(const rect *q, int64_t a, int64_t b, wm_pt p, wm_pt *poly,
     const wm_pt c[4] = {
         {q->x0, q->y0}, {q->x1, q->y0}, {q->x1, q->y1}, {q->x0, q->y1}};
     const int64_t len = (b - a + per) % per;
-    /* the corners by their distance from a */
-    int order[4] = {0, 1, 2, 3};
-    for (int i = 1; i < 4; i++)
-        for (int j = i; j > 0 && (cpos[order[j]] - a + per) % per <
-                                     (cpos[order[j - 1]] - a + per) % per;
-             j--)
-        {
-            const int t = order[j];
-            order[j] = order[j - 1];
-            order[j - 1] = t;
-        }
-    for (int i = 0; i < 4; i++)
+    /* the corners counter-clockwise from the first one past a */
+    int t0 = 0;
+    while (t0 < 4 && cpos[t0] <= a)
+        t0++;
+    for (int j = 0; j < 4; j++)
     {
-        const int64_t d = (cpos[order[i]] - a + per) % per;
+        const int t = (t0 + j) % 4;
+        const int64_t d = (cpos[t] - a + per) % per;
         if (d > 0 && d < len)
-            poly[(*n)++] = c[order[i]];
+            poly[(*n)++] = c[t];
     }
     poly[(*n)++] = p;
 }
@@ -1524,8 +1518,9 @@ static void try_pairings(pairings *t, int o, unsigned used)
  * -1 when the rule's pairing stays. */
 static int pair_many(walker *w, const rect *q, const xing *x, int k, int joined)
 {
-    if (k < 6 || k > LEAF_K || !arcs_apart(q, x, k))
-        return -1;
+    if (k < 6 || k > LEAF_K || !arcs_apart(q, x, k) ||
+        4 * (int64_t)(q->x1 - q->x0) * (q->y1 - q->y0) > LEAF_SAMPLES)
+        return -1; /* the samples would not cover the leaf */
     leaf_samples *ls = malloc(sizeof *ls);
     if (!ls)
         return 0;
