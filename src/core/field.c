@@ -117,27 +117,9 @@ static int seg_reaches_tile(const work *w, int32_t tx, int32_t ty, int64_t ax,
     const int64_t y0 = w->Y0 + (int64_t)ty * w->tsq - grow - 2;
     const double wx = (double)(w->tsq + 2 * (grow + 2));
     const double px = (double)(ax - x0), py = (double)(ay - y0);
-    const double dx = (double)(bx - ax), dy = (double)(by - ay);
-    const double p[4] = {-dx, dx, -dy, dy};
-    const double q[4] = {px, wx - px, py, wx - py};
-    double t0 = 0.0, t1 = 1.0;
-    for (int i = 0; i < 4; i++)
-    {
-        if (p[i] == 0.0)
-        {
-            if (q[i] < 0.0)
-                return 0;
-            continue;
-        }
-        const double t = q[i] / p[i];
-        if (p[i] < 0.0)
-            t0 = t > t0 ? t : t0;
-        else
-            t1 = t < t1 ? t : t1;
-        if (t0 > t1)
-            return 0;
-    }
-    return 1;
+    double t0, t1;
+    return wm_clip_box(px, py, (double)(bx - ax), (double)(by - ay), wx, wx,
+                       &t0, &t1);
 }
 
 static wm_status bin_items(work *w)

@@ -34,12 +34,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-struct wm_probe_edge
-{
-    uint32_t e; /* index into scene->edges */
-    uint32_t k; /* polygon slot: index into the probe's polys */
-};
-
 struct wm_probe_toggle
 {
     double t;   /* where an edge of polygon k crosses the segment */
@@ -339,10 +333,8 @@ static void clip_linear(double alpha, double beta, double lo, double hi,
     *t1 = b < *t1 ? b : *t1;
 }
 
-/* The interval of the line G + t u (u the unit vector of the axis) inside
- * the capsule of g, as [*lo, *hi]; returns 0 when the line misses it. */
-static int capsule_interval(const wm_river_seg *g, int64_t Gx, int64_t Gy,
-                            int vertical, double *lo, double *hi)
+int wm_probe_capsule_interval(const wm_river_seg *g, int64_t Gx, int64_t Gy,
+                              int vertical, double *lo, double *hi)
 {
     /* coordinates relative to G, axis first */
     const double ax = (double)(vertical ? g->ay - Gy : g->ax - Gx);
@@ -718,7 +710,7 @@ static int river_intervals(wm_probe *in, int64_t Gx, int64_t Gy, wm_pt P,
                 (vertical ? L : 0) ||
             (double)((g->ay > g->by ? g->ay : g->by) - Gy) + m < 0)
             continue;
-        if (!capsule_interval(g, Gx, Gy, vertical, &lo, &hi))
+        if (!wm_probe_capsule_interval(g, Gx, Gy, vertical, &lo, &hi))
             continue;
         if (lo <= 0 && hi >= L && cls0 && cls1 == cls0)
             return 0; /* water ends, the segment inside one capsule */
@@ -930,6 +922,39 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
     if (on_side && in->ndv && !side_rule(in, P, vertical, L, cls0, *cls1, &niv))
         return -1;
     return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
+}
+
+void wm_probe_rivers_near(const wm_probe *p, double x, double y,
+                          wm_probe_items *it)
+{
+    size_t c0, c1;
+    wm_cells_row(&p->cells, dcell(p, y), dcell(p, x), dcell(p, x), &c0, &c1);
+    *it = (wm_probe_items){p->cells.item + c0, c1 - c0, p->wide, p->nwide};
+}
+
+void wm_probe_lake_edges_near(const wm_probe *p, double x, double y,
+                              wm_probe_items *it)
+{
+    if (p->nledge == 0)
+    {
+        *it = (wm_probe_items){NULL, 0, NULL, 0};
+        return;
+    }
+    size_t c0, c1;
+    wm_cells_row(&p->lcells, dcell(p, y), dcell(p, x), dcell(p, x), &c0, &c1);
+    *it = (wm_probe_items){p->lcells.item + c0, c1 - c0, p->lwide, p->nlwide};
+}
+
+void wm_probe_lake_edges_ray(const wm_probe *p, double y, wm_probe_items *it)
+{
+    if (p->nledge == 0)
+    {
+        *it = (wm_probe_items){NULL, 0, NULL, 0};
+        return;
+    }
+    size_t b, e;
+    wm_cells_row(&p->lrows, rband(p, y), 0, 0, &b, &e);
+    *it = (wm_probe_items){p->lrows.item + b, e - b, NULL, 0};
 }
 
 double wm_probe_min_radius(const wm_probe *p, int32_t x0, int32_t y0,

@@ -22,7 +22,13 @@ extern "C"
      * wm_probe_init; what the block's stages find once and share (corners,
      * rebuilt cells) and the query scratch are written later.
      */
-    struct wm_probe_edge;
+    /** A lake edge of a probe: scene edge e of polygon slot k (an index
+     *  into the probe's polys). */
+    struct wm_probe_edge
+    {
+        uint32_t e;
+        uint32_t k;
+    };
     struct wm_probe_toggle;
 
     typedef struct
@@ -128,6 +134,40 @@ extern "C"
      */
     int wm_probe_crossings(wm_probe *p, wm_pt P, int vertical, int32_t L,
                            int cls0, int *cls1, int32_t *off, int max);
+
+    /**
+     * The interval [*lo, *hi] of the line through global lattice point
+     * (Gx, Gy) along +x (vertical == 0) or +y, as offsets from it, inside
+     * the capsule of g (double precision); returns 0 when the line misses
+     * it.
+     */
+    int wm_probe_capsule_interval(const wm_river_seg *g, int64_t Gx, int64_t Gy,
+                                  int vertical, double *lo, double *hi);
+
+    /** Items of a probe's index: a[0 .. na) then b[0 .. nb). */
+    typedef struct
+    {
+        const uint32_t *a;
+        size_t na;
+        const uint32_t *b;
+        size_t nb;
+    } wm_probe_items;
+
+    /** The river segments (indices into the scene's segs) that may come
+     *  within WM_PROBE_REACH of block-local point (x, y), and others. */
+    void wm_probe_rivers_near(const wm_probe *p, double x, double y,
+                              wm_probe_items *it);
+
+    /** The lake edges (indices into p->ledge) that may come within
+     *  WM_PROBE_REACH of block-local point (x, y), and others. */
+    void wm_probe_lake_edges_near(const wm_probe *p, double x, double y,
+                                  wm_probe_items *it);
+
+    /** The lake edges (indices into p->ledge) that the ray from any point
+     *  of local row y towards +x may cross (wm_edge_crosses_ray), and
+     *  others. */
+    void wm_probe_lake_edges_ray(const wm_probe *p, double y,
+                                 wm_probe_items *it);
 
     /**
      * The least radius (lattice units) of the river capsules that may come

@@ -30,7 +30,8 @@
  * subdividing it: each dividing segment's crossings are again found
  * exactly, until every piece holds one boundary segment between two of its
  * sides (a straight segment, as marching squares draws) or is 3-5 lattice
- * units wide (then its crossings are paired). A loose side with one
+ * units wide (then its crossings are paired as the inputs join the arcs
+ * between them inside it: leaf.c). A loose side with one
  * crossing keeps marching squares' segment, moved to the exact crossing.
  *
  * Why nothing is missed: a boundary component that meets an edge of the
@@ -64,6 +65,8 @@
 
 #include "contour.h"
 #include "corners.h"
+#include "lattice.h"
+#include "leaf.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -74,13 +77,6 @@
 /* Subdivision depth bound (a cell is 256 units: 7 halvings of each side
  * reach parts 3 units wide). */
 #define MAXDEPTH 32
-/* How deep (lattice units) the union must contradict a leaf's pairing to
- * turn it, and how far apart its crossings must lie along its boundary
- * (contradicted()). */
-#define LEAF_MARGIN 0.5
-#define LEAF_ARC 2
-/* Most crossings of a leaf whose every pairing is tried (pair_many()). */
-#define LEAF_K 8
 /* river caps narrower than this radius get their tips seeded (lattice
  * units): a wider cap's arc stays within a quarter pixel of its chords */
 #define THIN_CAP (1.5 * WM_Q)
@@ -1107,14 +1103,42 @@ static int seed_on(const rect *q, int s, int32_t v)
     return 0;
 }
 
-/* A split position in [lo + 3, hi - 3], nearest the middle, on no crossing
- * and no seed of sides a and b; or -1. Parts at least 3 units wide: a
- * part's side then holds two crossings, those of a strip one unit wide. A
+/* Whether a seed lies strictly inside q on the dividing line x = at
+ * (vertical) or y = at with none of its n crossings mid[] (coordinates)
+ * within a unit of it: a corner the line only touches (an island's vertex),
+ * left on a side of both parts where neither part's boundary passes
+ * through it (an island 3.8 units wide among three rivers and two lake
+ * pieces was cut into two halves too thin to keep: mosaic seed 139300 at
+ * 0.6 m). A line through a corner that the boundary crosses there puts a
+ * crossing on it, the corner's own. */
+static int seed_touched(const rect *q, int vertical, int32_t at,
+                        const int32_t *mid, int n)
+{
+    for (size_t i = 0; i < q->nseed; i++)
+    {
+        const wm_pt p = q->seed[i];
+        if (vertical ? !(p.x == at && p.y > q->y0 && p.y < q->y1)
+                     : !(p.y == at && p.x > q->x0 && p.x < q->x1))
+            continue;
+        const int32_t u = vertical ? p.y : p.x;
+        int crossed = 0;
+        for (int j = 0; j < n && !crossed; j++)
+            crossed = mid[j] >= u - 1 && mid[j] <= u + 1;
+        if (!crossed)
+            return 1;
+    }
+    return 0;
+}
+
+/* A split position in [lo + 3, hi - 3] but skip, nearest the middle, on
+ * no crossing and no seed of sides a and b; or -1. Parts at least 3 units wide:
+ * a part's side then holds two crossings, those of a strip one unit wide. A
  * dividing segment's end classes are those of the sides at its ends, which
  * at a crossing, or at a seed where water touches a side, are not its
  * ends' classes (a lake 0.18 pixel wide touching a cell's side at its
  * vertex vanished so). */
-static int32_t split_at(const rect *q, int32_t lo, int32_t hi, int a, int b)
+static int32_t split_at(const rect *q, int32_t lo, int32_t hi, int a, int b,
+                        int32_t skip)
 {
     const int32_t mid = lo + (hi - lo) / 2;
     for (int32_t d = 0; mid - d >= lo + 3 || mid + d <= hi - 3; d++)
@@ -1123,8 +1147,8 @@ static int32_t split_at(const rect *q, int32_t lo, int32_t hi, int a, int b)
             const int32_t v = sgn ? mid + d : mid - d;
             if (v < lo + 3 || v > hi - 3)
                 continue;
-            if (!taken(q, a, v) && !taken(q, b, v) && !seed_on(q, a, v) &&
-                !seed_on(q, b, v))
+            if (v != skip && !taken(q, a, v) && !taken(q, b, v) &&
+                !seed_on(q, a, v) && !seed_on(q, b, v))
                 return v;
         }
     return -1;
@@ -1194,26 +1218,6 @@ static int pair_all(walker *w, const rect *q, const xing *x, int k, int joined)
     return 1;
 }
 
-/* The exact signed distance (lattice units) at the point midway between
- * the middles of the two paths pair_all() draws for the four crossings x
- * (joined or not; a path's middle is its detour's turn or its midpoint):
- * a point of the region between them, which joins the water arcs of q's
- * boundary (joined) or its land arcs. */
-static double between_paths(walker *w, const rect *q, const xing *x, int joined)
-{
-    double sx = 0, sy = 0;
-    for (int i = 0; i < 4; i++)
-        if (x[i].out)
-        {
-            const xing *a = &x[i], *b = &x[joined ? (i + 1) % 4 : (i + 3) % 4];
-            const wm_pt m = a->side == b->side ? detour(q, a, b) : a->p;
-            const wm_pt n = a->side == b->side ? m : b->p;
-            sx += (double)m.x + n.x;
-            sy += (double)m.y + n.y;
-        }
-    return wm_probe_distance(w->probe, sx / 4, sy / 4, WM_PROBE_REACH);
-}
-
 /* The position of crossing p of side `side` along q's boundary,
  * counter-clockwise from (x0, y0). */
 static int64_t along(const rect *q, wm_pt p, int side)
@@ -1232,106 +1236,6 @@ static int64_t along(const rect *q, wm_pt p, int side)
     }
 }
 
-/* Whether consecutive crossings of x[0 .. k) lie LEAF_ARC units apart or
- * more along q's boundary. */
-static int arcs_apart(const rect *q, const xing *x, int k)
-{
-    const int64_t per = 2 * ((int64_t)(q->x1 - q->x0) + (q->y1 - q->y0));
-    for (int i = 0; i < k; i++)
-    {
-        const int64_t a = along(q, x[i].p, x[i].side);
-        const int64_t b = along(q, x[(i + 1) % k].p, x[(i + 1) % k].side);
-        if ((b - a + per) % per < LEAF_ARC)
-            return 0;
-    }
-    return 1;
-}
-
-/* Whether the union contradicts the pairing `joined` of a leaf's four
- * crossings x and bears out the other: the region between the pairing's
- * paths is of the other class LEAF_MARGIN units deep or more at the point
- * between_paths() takes, and the other pairing's point is of its class.
- * Only where consecutive crossings lie LEAF_ARC units apart or more along
- * q's boundary: a sliver thinner than a unit has its crossings set a unit
- * apart, up to about a unit off where it lies (twins seeds 135011 and
- * 135410 at 1 m), and no point tells where. */
-static int contradicted(walker *w, const rect *q, const xing *x, int joined)
-{
-    if (!arcs_apart(q, x, 4))
-        return 0;
-    const double d = between_paths(w, q, x, joined);
-    if (joined ? d < LEAF_MARGIN : d > -LEAF_MARGIN)
-        return 0;
-    const double e = between_paths(w, q, x, !joined);
-    return joined ? e > 0 : e <= 0;
-}
-
-/* The arc of a leaf's boundary holding position s (along()): i when it
- * lies between crossings i and i + 1 (at pos[]), -1 on a crossing. */
-static int arc_of(const int64_t *pos, int64_t s)
-{
-    int i = 3;
-    for (int j = 0; j < 4; j++)
-    {
-        if (s == pos[j])
-            return -1;
-        if (s > pos[j])
-            i = j;
-    }
-    return i;
-}
-
-/* Whether the exact search finds lattice line from P (length L, along x or
- * y), whose end classes are c0 and c1, wholly of class c0; -1 when out of
- * memory. */
-static int line_of_one_class(walker *w, wm_pt P, int vertical, int32_t L,
-                             int c0, int c1)
-{
-    if (c0 != c1)
-        return 0;
-    int32_t off[2];
-    const int n = wm_probe_crossings(w->probe, P, vertical, L, c0, &c1, off, 2);
-    return n < 0 ? -1 : n == 0;
-}
-
-/* joins[c]: whether an interior lattice line of leaf q lies wholly in
- * class c (1: water) from one arc of that class to another, by the exact
- * search that divides rectangles (a sliver crossing it is found, kept a
- * unit wide): the union joins those arcs inside the leaf. Returns 0 when
- * out of memory. */
-static int lines_join(walker *w, const rect *q, const xing *x, int *joins)
-{
-    int64_t pos[4];
-    for (int i = 0; i < 4; i++)
-        pos[i] = along(q, x[i].p, x[i].side);
-    joins[0] = joins[1] = 0;
-    for (int vertical = 0; vertical < 2; vertical++)
-    {
-        /* sides the line starts and ends on */
-        const int s0 = vertical ? SB : SL, s1 = vertical ? ST : SR;
-        const int32_t lo = vertical ? q->x0 : q->y0,
-                      hi = vertical ? q->x1 : q->y1;
-        for (int32_t v = lo + 1; v < hi; v++)
-        {
-            if (taken(q, s0, v) || taken(q, s1, v))
-                continue;
-            const int c0 = class_at(q, s0, v), c1 = class_at(q, s1, v);
-            const wm_pt P = vertical ? (wm_pt){v, q->y0} : (wm_pt){q->x0, v};
-            const wm_pt E = vertical ? (wm_pt){v, q->y1} : (wm_pt){q->x1, v};
-            const int one = line_of_one_class(
-                w, P, vertical, vertical ? q->y1 - q->y0 : q->x1 - q->x0, c0,
-                c1);
-            if (one < 0)
-                return 0;
-            const int a = arc_of(pos, along(q, P, s0)),
-                      b = arc_of(pos, along(q, E, s1));
-            if (one && a >= 0 && b >= 0 && a != b)
-                joins[c0] = 1;
-        }
-    }
-    return 1;
-}
-
 /* Emits each out crossing of x[0 .. k) with its mate. */
 static int pair_mates(walker *w, const rect *q, const xing *x, int k,
                       const int *mate)
@@ -1340,108 +1244,6 @@ static int pair_mates(walker *w, const rect *q, const xing *x, int k,
         if (x[i].out && !emit_pair(w, q, &x[i], &x[mate[i]]))
             return 0;
     return 1;
-}
-
-/* Appends to poly (*n points) the corners of q strictly between boundary
- * positions a and b (along(), counter-clockwise, wrapping), then b's
- * point p. */
-static void arc_to(const rect *q, int64_t a, int64_t b, wm_pt p, wm_pt *poly,
-                   int *n)
-{
-    const int64_t W = q->x1 - q->x0, H = q->y1 - q->y0, per = 2 * (W + H);
-    const int64_t cpos[4] = {0, W, W + H, 2 * W + H};
-    const wm_pt c[4] = {
-        {q->x0, q->y0}, {q->x1, q->y0}, {q->x1, q->y1}, {q->x0, q->y1}};
-    const int64_t len = (b - a + per) % per;
-    /* the corners counter-clockwise from the first one past a */
-    int t0 = 0;
-    while (t0 < 4 && cpos[t0] <= a)
-        t0++;
-    for (int j = 0; j < 4; j++)
-    {
-        const int t = (t0 + j) % 4;
-        const int64_t d = (cpos[t] - a + per) % per;
-        if (d > 0 && d < len)
-            poly[(*n)++] = c[t];
-    }
-    poly[(*n)++] = p;
-}
-
-/* Samples of a leaf's exact class for scoring pairings: the points half
- * a unit apart inside it, with the union's signed distance there. */
-#define LEAF_SAMPLES 256
-typedef struct
-{
-    double x[LEAF_SAMPLES], y[LEAF_SAMPLES], d[LEAF_SAMPLES];
-    int n;
-} leaf_samples;
-
-static void sample_leaf(walker *w, const rect *q, leaf_samples *ls)
-{
-    ls->n = 0;
-    for (double y = q->y0 + 0.25; y < q->y1; y += 0.5)
-        for (double x = q->x0 + 0.25; x < q->x1; x += 0.5)
-            if (ls->n < LEAF_SAMPLES)
-            {
-                ls->x[ls->n] = x;
-                ls->y[ls->n] = y;
-                ls->d[ls->n] =
-                    wm_probe_distance(w->probe, x, y, WM_PROBE_REACH);
-                ls->n++;
-            }
-}
-
-/* Whether (px, py) lies inside polygon poly (n points; even-odd). */
-static int in_poly(const wm_pt *poly, int n, double px, double py)
-{
-    int inside = 0;
-    for (int j = 0; j < n; j++)
-    {
-        const wm_pt u = poly[j], v = poly[(j + 1) % n];
-        if ((u.y > py) != (v.y > py) &&
-            px < u.x + (py - u.y) * (v.x - u.x) / (double)(v.y - u.y))
-            inside = !inside;
-    }
-    return inside;
-}
-
-/* How many samples of ls the pairing `mate` of leaf q's k crossings x
- * puts in a region (bounded by arcs of one class and the paths
- * emit_pair() draws) of the class they are not, LEAF_MARGIN units deep or
- * more. */
-static int contradictions(const rect *q, const xing *x, int k, const int *mate,
-                          const leaf_samples *ls)
-{
-    int64_t pos[LEAF_K];
-    for (int i = 0; i < k; i++)
-        pos[i] = along(q, x[i].p, x[i].side);
-    unsigned seen = 0;
-    int n_bad = 0;
-    for (int i0 = 0; i0 < k; i0++)
-    {
-        if (seen >> i0 & 1)
-            continue;
-        /* walk the region from arc i0: along arc i, then the path from
-         * crossing i + 1 to its mate, whose arc follows */
-        wm_pt poly[6 * LEAF_K];
-        int n = 0;
-        for (int i = i0; !(seen >> i & 1);)
-        {
-            seen |= 1u << i;
-            const int e = (i + 1) % k, m = mate[e];
-            poly[n++] = x[i].p;
-            arc_to(q, pos[i], pos[e], x[e].p, poly, &n);
-            if (x[e].side == x[m].side)
-                poly[n++] = detour(q, &x[e], &x[m]);
-            i = m;
-        }
-        const int water = !x[i0].out;
-        for (int j = 0; j < ls->n; j++)
-            if ((water ? ls->d[j] >= LEAF_MARGIN : ls->d[j] <= -LEAF_MARGIN) &&
-                in_poly(poly, n, ls->x[j], ls->y[j]))
-                n_bad++;
-    }
-    return n_bad;
 }
 
 /* Pairs on one side in pairing `mate`. */
@@ -1453,119 +1255,199 @@ static int same_side_pairs(const xing *x, const int *mate, int k)
     return n;
 }
 
-/* Whether pairs (a, b) and (c, d) of crossings interleave around the
- * boundary (their paths would cross). */
-static int interleave(int a, int b, int c, int d)
+/* Emits the boundary from a to b, two crossings of one side of leaf q
+ * that the boundary enters and leaves it by, through the corners of the
+ * union seeded strictly inside q (a wedge's tip, the corners of an island
+ * the side cuts) in their order around the point between a and b; through
+ * detour() when there is none. The boundary there is one path (no other
+ * crossing), so the corners on the boundary inside q are its own. */
+static int through_corners(walker *w, const rect *q, const xing *a,
+                           const xing *b)
 {
-    const int lo = a < b ? a : b, hi = a < b ? b : a;
-    return (lo < c && c < hi) != (lo < d && d < hi);
-}
-
-typedef struct
-{
-    const rect *q;
-    const xing *x;
-    int k;
-    const leaf_samples *ls;
-    int mate[LEAF_K], best[LEAF_K];
-    int best_bad, best_same;
-} pairings;
-
-/* Tries the pairings of the out crossings from `o` on with the in
- * crossings not in `used` that cross no pair and have at most one pair on
- * one side; keeps the one the union contradicts least (then the fewest
- * pairs on one side, then the first). */
-static void try_pairings(pairings *t, int o, unsigned used)
-{
-    while (o < t->k && !t->x[o].out)
-        o++;
-    if (o == t->k)
+    enum
     {
-        const int same = same_side_pairs(t->x, t->mate, t->k);
-        if (same > 1)
-            return;
-        const int bad = contradictions(t->q, t->x, t->k, t->mate, t->ls);
-        if (t->best_bad < 0 || bad < t->best_bad ||
-            (bad == t->best_bad && same < t->best_same))
+        MAXC = 8
+    };
+    wm_pt c[MAXC];
+    double th[MAXC];
+    int n = 0;
+    const double mx = (a->p.x + (double)b->p.x) / 2,
+                 my = (a->p.y + (double)b->p.y) / 2;
+    /* a at angle 0, b at pi, the inside of q between */
+    const double ux = a->p.x - mx, uy = a->p.y - my;
+    const double vx = a->side == SR ? -1 : a->side == SL ? 1 : 0;
+    const double vy = a->side == ST ? -1 : a->side == SB ? 1 : 0;
+    for (size_t i = 0; i < q->nseed; i++)
+    {
+        const wm_pt p = q->seed[i];
+        if (p.x <= q->x0 || p.x >= q->x1 || p.y <= q->y0 || p.y >= q->y1)
+            continue;
+        int dup = 0;
+        for (int j = 0; j < n && !dup; j++)
+            dup = c[j].x == p.x && c[j].y == p.y;
+        if (dup || fabs(wm_probe_distance(w->probe, p.x, p.y, 2.0)) > 1.0)
+            continue;
+        if (n == MAXC)
+            return emit_pair(w, q, a, b);
+        const double dx = p.x - mx, dy = p.y - my;
+        c[n] = p;
+        th[n] = atan2(dx * vx + dy * vy, dx * ux + dy * uy);
+        n++;
+    }
+    if (n == 0)
+        return emit_pair(w, q, a, b);
+    for (int i = 1; i < n; i++) /* by angle */
+        for (int j = i; j > 0 && th[j - 1] > th[j]; j--)
         {
-            t->best_bad = bad;
-            t->best_same = same;
-            memcpy(t->best, t->mate, sizeof t->mate);
+            const wm_pt tp = c[j];
+            c[j] = c[j - 1];
+            c[j - 1] = tp;
+            const double tt = th[j];
+            th[j] = th[j - 1];
+            th[j - 1] = tt;
         }
-        return;
-    }
-    for (int i = 0; i < t->k; i++)
+    wm_pt from = a->p;
+    for (int i = 0; i < n; i++)
     {
-        if (t->x[i].out || (used >> i & 1))
-            continue;
-        int ok = 1;
-        for (int a = 0; a < o && ok; a++)
-            if (t->x[a].out)
-                ok = !interleave(a, t->mate[a], o, i);
-        if (!ok)
-            continue;
-        t->mate[o] = i;
-        t->mate[i] = o;
-        try_pairings(t, o + 1, used | 1u << i);
+        if (!w->emit(w->user, from, c[i]))
+            return 0;
+        from = c[i];
     }
+    return w->emit(w->user, from, b->p);
 }
 
-/* Pairs a leaf of 6 to LEAF_K crossings, LEAF_ARC units apart or more,
- * whose pairing `joined` the union contradicts (contradictions(): samples
- * half a unit apart that it puts in a region of the class they are not),
- * the way it contradicts least among those that cross no pair and have at
- * most one pair on one side. Returns 1 when done, 0 when out of memory,
- * -1 when the rule's pairing stays. */
-static int pair_many(walker *w, const rect *q, const xing *x, int k, int joined)
+/* Whether the paths of pairing `mate` of leaf q's k crossings x, the pair
+ * on one side (at most one) turning at d, meet nowhere (exact). */
+static int paths_apart(const xing *x, int k, const int *mate, wm_pt d)
 {
-    if (k < 6 || k > LEAF_K || !arcs_apart(q, x, k) ||
-        4 * (int64_t)(q->x1 - q->x0) * (q->y1 - q->y0) > LEAF_SAMPLES)
-        return -1; /* the samples would not cover the leaf */
-    leaf_samples *ls = malloc(sizeof *ls);
-    if (!ls)
-        return 0;
-    sample_leaf(w, q, ls);
-    pairings t = {q, x, k, ls, {0}, {0}, -1, 0};
+    wm_pt seg[2 * WM_LEAF_ARCS * 2][2];
+    int path[2 * WM_LEAF_ARCS * 2], n = 0;
     for (int i = 0; i < k; i++)
         if (x[i].out)
         {
-            t.mate[i] = joined ? (i + 1) % k : (i + k - 1) % k;
-            t.mate[t.mate[i]] = i;
+            const wm_pt a = x[i].p, b = x[mate[i]].p;
+            if (x[i].side == x[mate[i]].side)
+            {
+                seg[n][0] = a, seg[n][1] = d, path[n++] = i;
+                seg[n][0] = d, seg[n][1] = b, path[n++] = i;
+            }
+            else
+                seg[n][0] = a, seg[n][1] = b, path[n++] = i;
         }
-    const int rule_bad = contradictions(q, x, k, t.mate, ls);
-    if (rule_bad > 0)
-        try_pairings(&t, 0, 0);
-    free(ls);
-    if (rule_bad == 0 || t.best_bad < 0 || t.best_bad >= rule_bad)
-        return -1;
-    return pair_mates(w, q, x, k, t.best);
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; j < n; j++)
+            if (path[i] != path[j] &&
+                wm_segments_meet(seg[i][0], seg[i][1], seg[j][0], seg[j][1]))
+                return 0;
+    return 1;
 }
 
-/* Pairs the crossings of a rectangle too small to divide: each out
- * crossing with the next in one counter-clockwise (the water corners
- * joined) or the previous (separated); the pairing with fewer pairs on one
- * side wins, the class of the centre decides a tie. The union may then
- * overrule it, never for a pairing with two pairs on one side each (the
- * rule never takes one: their two detours may meet at one point, which
- * chains cannot link). Of four crossings: where an interior lattice line
- * lies wholly in one class from one arc to another (lines_join(): a
- * wedge's tip entering a unit wide, mosaic seed 136951 at 0.5 m), the
- * pairing that keeps them in one region; else where the point between the
- * paths contradicts the rule's (contradicted(): a water wedge's tip in
- * the leaf next to land strips 3 units wide, mosaic seed 135325), the
- * other. Of six to LEAF_K, which a uniform pairing may not fit, the pairing
- * the union contradicts least (pair_many(): a lake's thin tip entering
- * through one side and leaving through two, mosaic seed 136904). When all
- * crossings lie on one side, the pairing in which no pair wraps around the
- * rectangle wins: the wrapping pair's path, drawn one unit inside the side
- * as emit_pair() draws it, would cross the others'. */
+/* Emits pairing `mate` of leaf q's k crossings x (at most one pair on one
+ * side), its pair on one side turning one unit inside at the first of its
+ * middle, its out crossing's and its other crossing's positions where the
+ * paths then meet nowhere: a nested pair's path may leave the side at a
+ * slant below the middle's turn (crossings one unit apart, mosaic seed
+ * 141419 at 2.5 m). Returns 1, 0 when out of memory, -1 when none does. */
+static int draw_pairs(walker *w, const rect *q, const xing *x, int k,
+                      const int *mate)
+{
+    int s = -1; /* the out crossing of the pair on one side */
+    for (int i = 0; i < k && s < 0; i++)
+        if (x[i].out && x[i].side == x[mate[i]].side)
+            s = i;
+    if (s < 0)
+        return paths_apart(x, k, mate, (wm_pt){0, 0})
+                   ? pair_mates(w, q, x, k, mate)
+                   : -1;
+    const xing *a = &x[s], *b = &x[mate[s]];
+    const wm_pt turn[3] = {detour(q, a, b), detour(q, a, a), detour(q, b, b)};
+    for (int t = 0; t < 3; t++)
+    {
+        if (!paths_apart(x, k, mate, turn[t]))
+            continue;
+        for (int i = 0; i < k; i++)
+            if (x[i].out && !(i == s ? w->emit(w->user, a->p, turn[t]) &&
+                                           w->emit(w->user, turn[t], b->p)
+                                     : w->emit(w->user, x[i].p, x[mate[i]].p)))
+                return 0;
+        return 1;
+    }
+    return -1;
+}
+
+/* Pairs leaf q's k crossings x as the union joins its water arcs inside
+ * it (wm_leaf_join): each arc's last crossing with the first of the next
+ * arc of its component, counter-clockwise. Returns 1 when done, 0 when
+ * out of memory, -1 when the inputs there are beyond that reading, or
+ * their pairing is one the paths cannot draw (crossing pairs, two pairs
+ * on one side each, or paths that would meet: draw_pairs()). */
+static int pair_exact(walker *w, const rect *q, const xing *x, int k)
+{
+    if (k > 2 * WM_LEAF_ARCS)
+        return -1;
+    const int64_t per = 2 * ((int64_t)(q->x1 - q->x0) + (q->y1 - q->y0));
+    int64_t arc[2 * WM_LEAF_ARCS] = {0};
+    int from[WM_LEAF_ARCS] = {0}, label[WM_LEAF_ARCS] = {0}, n = 0;
+    for (int i = 0; i < k; i++)
+        if (x[(i + 1) % k].out) /* water from crossing i to i + 1 */
+        {
+            const int64_t a = along(q, x[i].p, x[i].side);
+            const int64_t b = along(q, x[(i + 1) % k].p, x[(i + 1) % k].side);
+            arc[2 * n] = a;
+            arc[2 * n + 1] = b > a ? b : b + per;
+            from[n++] = i;
+        }
+    const int got =
+        wm_leaf_join(w->probe, q->x0, q->y0, q->x1, q->y1, n, arc, label);
+    if (got <= 0)
+        return got < 0 ? 0 : -1;
+    for (int a = 0; a < n; a++)
+        for (int b = a + 1; b < n; b++)
+            for (int c = b + 1; c < n; c++)
+                for (int d = c + 1; d < n; d++)
+                    if (label[a] == label[c] && label[b] == label[d] &&
+                        label[a] != label[b])
+                        return -1; /* components interleave */
+    int mate[2 * WM_LEAF_ARCS] = {0};
+    for (int a = 0; a < n; a++)
+    {
+        int b = (a + 1) % n;
+        while (label[b] != label[a])
+            b = (b + 1) % n;
+        const int out = (from[a] + 1) % k; /* arc a's last crossing */
+        mate[out] = from[b];
+        mate[from[b]] = out;
+    }
+    if (same_side_pairs(x, mate, k) > 1)
+        return -1;
+    return draw_pairs(w, q, x, k, mate);
+}
+
+/* Pairs the crossings of a rectangle too small to divide. Two on one side
+ * are one path into the leaf and out, through the corners inside it
+ * (through_corners()). More on one side: each with the next or previous
+ * one, so that no pair wraps around the rectangle (the wrapping pair's
+ * path, drawn one unit inside the side as emit_pair() draws it, would
+ * cross the others'). Else as the union joins the water arcs inside the
+ * leaf (pair_exact()); where the inputs there are beyond that reading,
+ * each out crossing with the next in one counter-clockwise (the water
+ * corners joined) or the previous (separated), the pairing with fewer
+ * pairs on one side winning, the class of the centre deciding a tie (its
+ * pair on one side turning where the paths meet nowhere, draw_pairs(),
+ * when there is such a place). */
 static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
 {
     int one_side = 1;
     for (int i = 1; i < k; i++)
         one_side &= x[i].side == x[0].side;
+    if (one_side && k == 2)
+        return x[0].out ? through_corners(w, q, &x[0], &x[1])
+                        : through_corners(w, q, &x[1], &x[0]);
     if (one_side)
         return pair_all(w, q, x, k, !x[k - 1].out);
+    const int exact = pair_exact(w, q, x, k);
+    if (exact >= 0)
+        return exact;
     int same[2] = {0, 0};
     for (int j = 0; j < 2; j++)
         for (int i = 0; i < k; i++)
@@ -1580,20 +1462,22 @@ static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
     else
         joined = wm_probe_distance(w->probe, (q->x0 + q->x1) / 2.0,
                                    (q->y0 + q->y1) / 2.0, WM_PROBE_REACH) <= 0;
-    if (k == 4)
+    if (k <= 2 * WM_LEAF_ARCS)
     {
-        int joins[2];
-        if (!lines_join(w, q, x, joins))
-            return 0;
-        /* same[!p]: pairs on one side of pairing p (joined or not) */
-        if (joins[0] != joins[1] && same[joins[0]] <= 1)
-            joined = joins[1];
-        else if (joins[0] == joins[1] && same[joined] <= 1 &&
-                 contradicted(w, q, x, joined))
-            joined = !joined;
+        int mate[2 * WM_LEAF_ARCS];
+        for (int i = 0; i < k; i++)
+            if (x[i].out)
+            {
+                mate[i] = joined ? (i + 1) % k : (i + k - 1) % k;
+                mate[mate[i]] = i;
+            }
+        const int drawn = same_side_pairs(x, mate, k) <= 1
+                              ? draw_pairs(w, q, x, k, mate)
+                              : -1;
+        if (drawn >= 0)
+            return drawn;
     }
-    const int many = pair_many(w, q, x, k, joined);
-    return many >= 0 ? many : pair_all(w, q, x, k, joined);
+    return pair_all(w, q, x, k, joined);
 }
 
 /* Crossings of the dividing segment from P (length L, along x or y) with
@@ -1612,8 +1496,11 @@ static int divide(walker *w, wm_pt P, int vertical, int32_t L, int cls0,
 
 /* Splits q in two at x = at (vertical != 0) or y = at, along one
  * dividing segment whose crossings are found exactly (its end classes are
- * those of the sides it starts and ends on), and runs both parts. */
-static int split(walker *w, const rect *q, int vertical, int32_t at, int depth)
+ * those of the sides it starts and ends on), and runs both parts; with
+ * retry, returns -2 instead where the segment only touches a seed
+ * (seed_touched()), for another position to be tried. */
+static int split(walker *w, const rect *q, int vertical, int32_t at, int depth,
+                 int retry)
 {
     int32_t *mid = malloc(MAXCROSS * sizeof *mid);
     if (!mid)
@@ -1631,6 +1518,11 @@ static int split(walker *w, const rect *q, int vertical, int32_t at, int depth)
     const wm_pt P = v ? (wm_pt){at, q->y0} : (wm_pt){q->x0, at};
     const int n =
         divide(w, P, v, v ? q->y1 - q->y0 : q->x1 - q->x0, c0, &c1, mid);
+    if (n >= 0 && retry && seed_touched(q, v, at, mid, n))
+    {
+        free(mid);
+        return -2;
+    }
     int ok = n >= 0;
     rect part[2];
     for (int k = 0; k < 2 && ok; k++)
@@ -1654,20 +1546,32 @@ static int split(walker *w, const rect *q, int vertical, int32_t at, int depth)
 }
 
 /* Divides q across its longer side (where a position is free of
- * crossings, the parts at least 3 units wide) and runs the parts; returns
- * 1, 0 when out of memory, or -1 when q cannot be divided. */
+ * crossings, the parts at least 3 units wide; once elsewhere when the
+ * first position only touches a seed) and runs the parts; returns 1, 0
+ * when out of memory, or -1 when q cannot be divided. */
 static int divide_rect(walker *w, const rect *q, int depth)
 {
     if (depth >= MAXDEPTH)
         return -1;
-    const int32_t sx =
-        q->x1 - q->x0 >= 6 ? split_at(q, q->x0, q->x1, SB, ST) : -1;
-    const int32_t sy =
-        q->y1 - q->y0 >= 6 ? split_at(q, q->y0, q->y1, SL, SR) : -1;
-    if (sx < 0 && sy < 0)
-        return -1;
-    const int vertical = sx > 0 && (sy < 0 || q->x1 - q->x0 >= q->y1 - q->y0);
-    return split(w, q, vertical, vertical ? sx : sy, depth);
+    int32_t skip[2] = {-1, -1};
+    for (int retry = 1;; retry = 0)
+    {
+        const int32_t sx = q->x1 - q->x0 >= 6
+                               ? split_at(q, q->x0, q->x1, SB, ST, skip[1])
+                               : -1;
+        const int32_t sy = q->y1 - q->y0 >= 6
+                               ? split_at(q, q->y0, q->y1, SL, SR, skip[0])
+                               : -1;
+        if (sx < 0 && sy < 0)
+            return -1;
+        const int vertical =
+            sx > 0 && (sy < 0 || q->x1 - q->x0 >= q->y1 - q->y0);
+        const int32_t at = vertical ? sx : sy;
+        const int ok = split(w, q, vertical, at, depth, retry);
+        if (ok != -2)
+            return ok;
+        skip[vertical] = at; /* once: a seed the line only touches */
+    }
 }
 
 /* Whether a seed lies in q (sides included). */

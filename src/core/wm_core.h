@@ -239,6 +239,35 @@ extern "C"
         return lo;
     }
 
+    /** Liang-Barsky clipping: the part [*t0, *t1] of the segment p + t d,
+     *  0 <= t <= 1, inside the box [0, w] x [0, h] (p relative to the box's
+     *  corner); returns 0 when the segment misses the box. */
+    static inline int wm_clip_box(double px, double py, double dx, double dy,
+                                  double w, double h, double *t0, double *t1)
+    {
+        const double p[4] = {-dx, dx, -dy, dy};
+        const double q[4] = {px, w - px, py, h - py};
+        *t0 = 0.0;
+        *t1 = 1.0;
+        for (int i = 0; i < 4; i++)
+        {
+            if (p[i] == 0.0)
+            {
+                if (q[i] < 0.0)
+                    return 0;
+                continue;
+            }
+            const double t = q[i] / p[i];
+            if (p[i] < 0.0)
+                *t0 = t > *t0 ? t : *t0;
+            else
+                *t1 = t < *t1 ? t : *t1;
+            if (*t0 > *t1)
+                return 0;
+        }
+        return 1;
+    }
+
     /** Number of vertices of ring i. */
     static inline size_t wm_rings_len(const wm_rings *r, size_t i)
     {
