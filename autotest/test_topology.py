@@ -361,7 +361,8 @@ RING_SCENES = ['twins-135011@1:128', 'twins-135410@1:128', 'mosaic-135325',
                'mosaic-137127@2:256', 'mosaic-136951', 'mosaic-136904',
                'spike-138212@5:640', 'spike-138229@5:640',
                'mosaic-139109@1.5:192', 'mosaic-139300@0.6:76.8',
-               'spike-140638@8:1024', 'mosaic-141419@2.5:320']
+               'spike-140638@8:1024', 'mosaic-141419@2.5:320',
+               'grid-142216@3:384', 'grid-142233@3:384']
 
 
 @pytest.mark.parametrize('scene', SCENE_IDS + RING_SCENES, indirect=True)

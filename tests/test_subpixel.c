@@ -47,6 +47,29 @@ static int vertex_near(const wm_rings *r, double x, double y, double d)
     return 0;
 }
 
+/* Checks that both blocks sharing the side x = 32 px of scene s (blocks
+ * of 32 px) find two crossings, at offsets lo and hi, on its segment from
+ * y = 19 to 20 px, water at both ends; frees s. */
+static void side_gap(wm_scene *s, int32_t lo, int32_t hi, const char *what)
+{
+    for (int bx = 0; bx < 2; bx++)
+    {
+        wm_probe p;
+        TAP_EQ(wm_probe_init(&p, s, bx, 0), WM_OK, "probe of block (%d, 0)",
+               bx);
+        int32_t off[WM_Q];
+        int cls1 = 1;
+        const int k =
+            wm_probe_crossings(&p, (wm_pt){(1 - bx) * 32 * WM_Q, 19 * WM_Q}, 1,
+                               WM_Q, 1, &cls1, off, WM_Q);
+        TAP_OK(k == 2 && off[0] == lo && off[1] == hi,
+               "block (%d, 0): %s (%d, %d), got %d crossings %d %d", bx, what,
+               lo, hi, k, k > 0 ? off[0] : -1, k > 1 ? off[1] : -1);
+        wm_probe_free(&p);
+    }
+    wm_scene_free(s);
+}
+
 /* A block side along a lake's edge (lake A left of x = 32, blocks of 32
  * px), with land of the block across touching it between two lakes there
  * (C below y = 19.5, B above y = 20): the side's segment from y = 19 to 20
@@ -64,23 +87,29 @@ static void block_side(void)
     su_lake(&s, b, four, 1);
     su_lake(&s, c, four, 1);
     su_finish(&s);
-    for (int bx = 0; bx < 2; bx++)
-    {
-        wm_probe p;
-        TAP_EQ(wm_probe_init(&p, &s, bx, 0), WM_OK, "probe of block (%d, 0)",
-               bx);
-        int32_t off[WM_Q];
-        int cls1 = 1;
-        const int k =
-            wm_probe_crossings(&p, (wm_pt){(1 - bx) * 32 * WM_Q, 19 * WM_Q}, 1,
-                               WM_Q, 1, &cls1, off, WM_Q);
-        TAP_OK(k == 2 && off[0] == 128 && off[1] == WM_Q - 1,
-               "block (%d, 0): the side's water ends at the gap (128) and "
-               "meets B a unit before its edge (255), got %d crossings %d %d",
-               bx, k, k > 0 ? off[0] : -1, k > 1 ? off[1] : -1);
-        wm_probe_free(&p);
-    }
-    wm_scene_free(&s);
+    side_gap(&s, 128, WM_Q - 1,
+             "the side's water ends at the gap and meets B a unit before its "
+             "edge");
+}
+
+/* A river's bank along a block side (river V right of x = 32, blocks of
+ * 32 px), a lake left of it below y = 19 and a river D across the side
+ * above y = 20: the side between them is water only on V's bank, a line,
+ * with land a unit across in block 0, so both blocks find the land gap's
+ * two crossings there (grid seed 142216 at 3 m: a lake and a river joined
+ * along a bank on the side). */
+static void bank_on_side(void)
+{
+    wm_scene s;
+    su_init(&s, 32);
+    const double v[] = {33, -5, 33, 40}, d[] = {10, 20.5, 40, 20.5};
+    const double lake[] = {20, 4, 32, 4, 32, 19, 20, 19};
+    const int four = 4;
+    su_river(&s, v, 2, 1.0);
+    su_river(&s, d, 2, 0.5);
+    su_lake(&s, lake, &four, 1);
+    su_finish(&s);
+    side_gap(&s, 1, WM_Q - 1, "land between the lake and D on the side");
 }
 
 int main(void)
@@ -381,5 +410,6 @@ int main(void)
     wm_rings_free(&r1);
     wm_scene_free(&s);
     block_side();
+    bank_on_side();
     return TAP_DONE();
 }

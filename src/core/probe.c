@@ -679,15 +679,31 @@ static int round_crossings(const double *iv, size_t niv, int32_t L, int cls0,
     return n;
 }
 
+/* Whether capsule g's bank lies along the line through global (Gx, Gy)
+ * along x or y (vertical), within WM_COINCIDE: its axis parallel to the
+ * line, at the radius from it. */
+static int bank_along(const wm_river_seg *g, int64_t Gx, int64_t Gy,
+                      int vertical)
+{
+    if (vertical ? g->ax != g->bx : g->ay != g->by)
+        return 0;
+    const double w = (double)(vertical ? g->ax - Gx : g->ay - Gy);
+    return fabs(fabs(w) - g->r) < WM_COINCIDE;
+}
+
 /* Appends to in->iv (*niv) the intervals of the river capsules meeting
  * the segment (those of its midpoint's cell: any capsule meeting it is
  * within half of it from the midpoint, so registered); *inside is set
- * when a bank meets the segment, ends included. Returns 0 when the
- * segment lies in one capsule and cls0 (water) and *cls1 agree (the
- * crossings are known: none), -1 when out of memory, else 1. */
+ * when a bank meets the segment, ends included. On a block side (along),
+ * a capsule whose bank lies along the segment is noted in in->dv too, as
+ * a lake's edge along it: side_rule() decides that water (a bank on the
+ * side is the side's water only where the points a unit across are).
+ * Returns 0 when the segment lies in one capsule and cls0 (water) and
+ * *cls1 agree (the crossings are known: none), -1 when out of memory,
+ * else 1. */
 static int river_intervals(wm_probe *in, int64_t Gx, int64_t Gy, wm_pt P,
                            int vertical, int32_t L, int cls0, int cls1,
-                           size_t *niv, int *inside)
+                           size_t *niv, int *inside, int along)
 {
     const wm_scene *s = in->s;
     const double mx = P.x + (vertical ? 0 : L / 2.0);
@@ -712,8 +728,11 @@ static int river_intervals(wm_probe *in, int64_t Gx, int64_t Gy, wm_pt P,
             continue;
         if (!wm_probe_capsule_interval(g, Gx, Gy, vertical, &lo, &hi))
             continue;
-        if (lo <= 0 && hi >= L && cls0 && cls1 == cls0)
+        const int bank = along && bank_along(g, Gx, Gy, vertical);
+        if (!bank && lo <= 0 && hi >= L && cls0 && cls1 == cls0)
             return 0; /* water ends, the segment inside one capsule */
+        if (bank && !push_interval(&in->dv, &in->dvcap, &in->ndv, lo, hi, L))
+            return -1;
         /* a bank through an end sample counts: the end's class may be
          * water only by that bank (distance 0), the land beside it found
          * below (two rivers whose banks lie on sample rows) */
@@ -732,7 +751,7 @@ static int seg_water(wm_probe *in, wm_pt P, int vertical, int32_t L,
     const int64_t Gx = (int64_t)P.x + in->X0, Gy = (int64_t)P.y + in->Y0;
     int inside = 0;
     *niv = 0;
-    if (river_intervals(in, Gx, Gy, P, vertical, L, 0, 0, niv, &inside) < 0)
+    if (river_intervals(in, Gx, Gy, P, vertical, L, 0, 0, niv, &inside, 0) < 0)
         return 0;
     const long ntg =
         in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L, niv) : 0;
@@ -893,20 +912,21 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
 {
     const int64_t Gx = (int64_t)P.x + in->X0, Gy = (int64_t)P.y + in->Y0;
     const int32_t S = in->s->n * WM_Q;
+    const int on_side = vertical ? P.x == 0 || P.x == S : P.y == 0 || P.y == S;
     size_t niv = 0;
     int inside = 0; /* an input's boundary meets the segment, ends included */
-    const int r =
-        river_intervals(in, Gx, Gy, P, vertical, L, cls0, *cls1, &niv, &inside);
+    in->ndv = 0;
+    const int r = river_intervals(in, Gx, Gy, P, vertical, L, cls0, *cls1, &niv,
+                                  &inside, on_side);
     if (r <= 0)
         return r;
     const size_t nriver = niv;
-    in->ndv = 0;
     const long ntg =
         in->nledge ? lake_toggles(in, Gx, Gy, P, vertical, L, &niv) : 0;
     if (ntg < 0)
         return -1;
     inside |= niv > nriver; /* a lake's edge along the segment or at an end */
-    if (!inside && ntg == 0 && (*cls1 < 0 || *cls1 == cls0))
+    if (!inside && ntg == 0 && in->ndv == 0 && (*cls1 < 0 || *cls1 == cls0))
     {
         /* every input's membership is constant along the segment */
         if (*cls1 < 0)
@@ -918,7 +938,6 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
             return -1;
     if (niv > 1)
         sort_small(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
-    const int on_side = vertical ? P.x == 0 || P.x == S : P.y == 0 || P.y == S;
     if (on_side && in->ndv && !side_rule(in, P, vertical, L, cls0, *cls1, &niv))
         return -1;
     return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
