@@ -1343,11 +1343,12 @@ static int paths_apart(const xing *x, int k, const int *mate, wm_pt d)
 }
 
 /* Emits pairing `mate` of leaf q's k crossings x (at most one pair on one
- * side), its pair on one side turning one unit inside at the first of its
- * middle, its out crossing's and its other crossing's positions where the
- * paths then meet nowhere: a nested pair's path may leave the side at a
- * slant below the middle's turn (crossings one unit apart, mosaic seed
- * 141419 at 2.5 m). Returns 1, 0 when out of memory, -1 when none does. */
+ * side). The pair on one side turns one unit inside the side, at the first
+ * of three places where no two paths then meet: across from its middle,
+ * from its out crossing, from its other crossing (a path nesting it may
+ * leave the side at a slant, passing under the middle's turn: crossings a
+ * unit apart, mosaic seed 141419 at 2.5 m). Returns 1, 0 when out of
+ * memory, -1 when no place does. */
 static int draw_pairs(walker *w, const rect *q, const xing *x, int k,
                       const int *mate)
 {
