@@ -72,7 +72,6 @@ typedef struct
     uint32_t id; /* segment index, or polygon slot */
     double iv[2 * STRETCHES];
     int niv;
-    int inside; /* a capsule meeting R but no side of it */
     /* a lake's piece, when its slot has several in R: the runs of edges
      * (first, last scene edge) of the chains bounding it; none: every edge
      * of the slot */
@@ -166,7 +165,7 @@ static int gather_rivers(leaf *l)
             (double)((g->ay < g->by ? g->ay : g->by) - l->GY) - m > l->H ||
             (double)((g->ay > g->by ? g->ay : g->by) - l->GY) + m < 0)
             continue;
-        item t = {0, id, {0}, 0, strictly_in(l, g->ax, g->ay), 0, {0}};
+        item t = {0, id, {0}, 0, 0, {0}};
         for (int k = 0; k < 4; k++)
         {
             int64_t Gx, Gy;
@@ -178,8 +177,8 @@ static int gather_rivers(leaf *l)
                 !add_stretch(l, &t, k, lo, hi))
                 return 0;
         }
-        if (t.niv == 0 && !t.inside)
-            continue;
+        if (t.niv == 0 && !strictly_in(l, g->ax, g->ay))
+            continue; /* meets R's sides nowhere, nor lies inside R */
         if (l->n == WM_LEAF_ITEMS)
             return 0;
         l->it[l->n++] = t;
@@ -332,12 +331,6 @@ static int cmp_ring(const void *a, const void *b)
     return (x->u > y->u) - (x->u < y->u);
 }
 
-static int cmp_pos(const void *a, const void *b)
-{
-    const toggle *x = a, *y = b;
-    return (x->pos > y->pos) - (x->pos < y->pos);
-}
-
 /* Whether edges a .. b (scene indices, a <= b) run on one after another. */
 static int consecutive(const wm_lake_edge *E, uint32_t a, uint32_t b)
 {
@@ -484,35 +477,39 @@ static int cut_by_lake(const leaf *l, uint32_t k, cut *c)
 static int add_pieces(leaf *l, uint32_t k, const cut *c, int odd0)
 {
     const int n = c->n;
-    /* the toggles along R's boundary, each with its chain's other end */
-    toggle by[2 * CHAINS];
-    int mate[2 * CHAINS], at[2 * CHAINS];
-    memcpy(by, c->tg, (size_t)n * sizeof *by);
+    /* ring[i]: the toggle (ring order) i-th along R's boundary; at[]: its
+     * inverse; mate[]: the other end of its chain, by position */
+    int ring[2 * CHAINS], at[2 * CHAINS], mate[2 * CHAINS];
     for (int i = 0; i < n; i++)
-        by[i].u = i; /* its index in ring order */
-    qsort(by, (size_t)n, sizeof *by, cmp_pos);
+    {
+        int j = i;
+        for (; j > 0 && c->tg[ring[j - 1]].pos > c->tg[i].pos; j--)
+            ring[j] = ring[j - 1];
+        ring[j] = i;
+    }
     for (int i = 0; i < n; i++)
-        at[(int)by[i].u] = i;
+        at[ring[i]] = i;
     for (int j = 0; j < n; j += 2)
     {
         mate[at[j]] = at[j + 1];
         mate[at[j + 1]] = at[j];
     }
-    /* arc i runs from by[i] to by[i + 1]; the one through the first corner
-     * (i = n - 1) is of class odd0 */
+    /* arc i runs from toggle ring[i] to ring[i + 1] along R's boundary; the
+     * one through the first corner (i = n - 1) is of class odd0 */
     unsigned seen = 0;
     for (int i0 = 0; i0 < n; i0++)
     {
         if ((seen >> i0 & 1) || (odd0 ^ ((i0 + 1) & 1)) == 0)
             continue;
-        item t = {1, k, {0}, 0, 0, 0, {0}};
+        item t = {1, k, {0}, 0, 0, {0}};
         for (int i = i0; !(seen >> i & 1); i = mate[(i + 1) % n])
         {
             seen |= 1u << i;
             if ((odd0 ^ ((i + 1) & 1)) == 0 || t.niv + 2 > STRETCHES ||
                 t.nrun + 2 > RUNS)
                 return 0;
-            const double a = by[i].pos, b = by[(i + 1) % n].pos;
+            const double a = c->tg[ring[i]].pos;
+            const double b = c->tg[ring[(i + 1) % n]].pos;
             t.iv[2 * t.niv] = a;
             t.iv[2 * t.niv + 1] = i + 1 < n ? b : l->per;
             t.niv++;
@@ -522,8 +519,8 @@ static int add_pieces(leaf *l, uint32_t k, const cut *c, int odd0)
                 t.iv[2 * t.niv + 1] = b;
                 t.niv++;
             }
-            /* the chain from by[i + 1], by its entering toggle */
-            const int j = (int)by[(i + 1) % n].u & ~1;
+            /* the chain from toggle ring[i + 1], by its entering toggle */
+            const int j = ring[(i + 1) % n] & ~1;
             t.nrun += chain_runs(c->tg, n, j, c->wrap, c->rs, c->re,
                                  t.run + 2 * t.nrun);
         }
@@ -549,7 +546,7 @@ static int add_lake(leaf *l, uint32_t k)
         return 1; /* misses R */
     if (l->n == WM_LEAF_ITEMS)
         return 0;
-    l->it[l->n++] = (item){1, k, {0, l->per}, 1, 0, 0, {0}};
+    l->it[l->n++] = (item){1, k, {0, l->per}, 1, 0, {0}};
     return 1;
 }
 

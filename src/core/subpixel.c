@@ -1402,13 +1402,8 @@ static int pair_exact(walker *w, const rect *q, const xing *x, int k)
         wm_leaf_join(w->probe, q->x0, q->y0, q->x1, q->y1, n, arc, label);
     if (got <= 0)
         return got < 0 ? 0 : -1;
-    for (int a = 0; a < n; a++)
-        for (int b = a + 1; b < n; b++)
-            for (int c = b + 1; c < n; c++)
-                for (int d = c + 1; d < n; d++)
-                    if (label[a] == label[c] && label[b] == label[d] &&
-                        label[a] != label[b])
-                        return -1; /* components interleave */
+    /* components that interleave give crossing pairs, whose paths meet:
+     * draw_pairs() declines them */
     int mate[2 * WM_LEAF_ARCS] = {0};
     for (int a = 0; a < n; a++)
     {
