@@ -221,6 +221,8 @@ typedef struct
     size_t npr, prcap;
     wm_cells pg; /* primitives by cell */
     double *pb;  /* their boxes */
+    int32_t *pc; /* the cells their boxes cover, clipped to the grown
+                    block: x0, y0, x1, y1 (x0 > x1: none) */
     int64_t cmin;
     hit_pt *cand; /* primitive crossings, then the kept ones */
     size_t ncand, candcap;
@@ -313,20 +315,24 @@ static int bucket(finder *cf)
     const int64_t cside = (int64_t)floor(hi / PC) - cf->cmin + 1;
     wm_cells_reset(&cf->pg, (int32_t)cside);
     cf->pb = malloc((4 * cf->npr + 1) * sizeof *cf->pb);
-    if (!cf->pb)
+    cf->pc = malloc((4 * cf->npr + 1) * sizeof *cf->pc);
+    if (!cf->pb || !cf->pc)
         return 0;
     for (size_t i = 0; i < cf->npr; i++)
     {
         double *pb = cf->pb + 4 * i;
+        int32_t *pc = cf->pc + 4 * i;
         prim_box(&cf->pr[i], pb);
         const double b[4] = {fmax(pb[0], lo), fmax(pb[1], lo), fmin(pb[2], hi),
                              fmin(pb[3], hi)};
+        pc[0] = 1, pc[2] = 0;
         if (b[0] > b[2] || b[1] > b[3])
             continue;
         const int32_t x0 = (int32_t)((int64_t)floor(b[0] / PC) - cf->cmin);
         const int32_t x1 = (int32_t)((int64_t)floor(b[2] / PC) - cf->cmin);
         const int32_t y0 = (int32_t)((int64_t)floor(b[1] / PC) - cf->cmin);
         const int32_t y1 = (int32_t)((int64_t)floor(b[3] / PC) - cf->cmin);
+        pc[0] = x0, pc[1] = y0, pc[2] = x1, pc[3] = y1;
         for (int32_t cy = y0; cy <= y1; cy++)
             for (int32_t cx = x0; cx <= x1; cx++)
                 if (!wm_cells_add(&cf->pg, cx, cy, (uint32_t)i))
@@ -335,13 +341,29 @@ static int bucket(finder *cf)
     return wm_cells_index(&cf->pg) == WM_OK;
 }
 
-/* Step 2b: the crossings of primitives i and j that lie in grid cell
- * (cx, cy) (so that a pair sharing cells is found once) and strictly
- * inside the block, added to the candidates. */
+/* Whether cell (cx, cy) of the grid (relative to cf->cmin) is one both
+ * primitives' boxes cover. */
+static int shared_cell(const finder *cf, uint32_t i, uint32_t j, int64_t cx,
+                       int64_t cy)
+{
+    const int32_t *a = cf->pc + 4 * i, *b = cf->pc + 4 * j;
+    return cx >= a[0] && cx <= a[2] && cy >= a[1] && cy <= a[3] && cx >= b[0] &&
+           cx <= b[2] && cy >= b[1] && cy <= b[3];
+}
+
+/* Step 2b: the crossings of primitives i and j, met in grid cell (cx, cy)
+ * (relative to cf->cmin), that lie in a cell both their boxes cover and
+ * strictly inside the block, added to the candidates. A pair is
+ * intersected once, in the first cell it shares (the largest of their
+ * first columns and rows); its other cells return at once. */
 static int pair_hits(finder *cf, uint32_t i, uint32_t j, int64_t cx, int64_t cy)
 {
     const prim *p = &cf->pr[i], *q = &cf->pr[j];
     if (p->item == q->item && p->item != NO_ITEM)
+        return 1;
+    const int32_t *ci = cf->pc + 4 * i, *cj = cf->pc + 4 * j;
+    if (cx != (ci[0] > cj[0] ? ci[0] : cj[0]) ||
+        cy != (ci[1] > cj[1] ? ci[1] : cj[1]))
         return 1;
     /* with a circle, boxes apart by more than any rounding give no hit; two
      * nearly parallel lines may (their crossing is noise, far off), and
@@ -359,8 +381,8 @@ static int pair_hits(finder *cf, uint32_t i, uint32_t j, int64_t cx, int64_t cy)
          * be seen */
         hit[h].x = fmin(fmax(hit[h].x, fmax(bp[0], bq[0])), fmin(bp[2], bq[2]));
         hit[h].y = fmin(fmax(hit[h].y, fmax(bp[1], bq[1])), fmin(bp[3], bq[3]));
-        if (floor(hit[h].x / PC) != (double)cx ||
-            floor(hit[h].y / PC) != (double)cy)
+        if (!shared_cell(cf, i, j, (int64_t)floor(hit[h].x / PC) - cf->cmin,
+                         (int64_t)floor(hit[h].y / PC) - cf->cmin))
             continue;
         if (!(hit[h].x >= 0 && hit[h].x <= cf->S && hit[h].y >= 0 &&
               hit[h].y <= cf->S))
@@ -388,7 +410,7 @@ static wm_status pairs(finder *cf)
         for (size_t cell = pg->row[row]; cell < pg->row[row + 1]; cell++)
         {
             const size_t a = pg->start[cell], z = pg->start[cell + 1];
-            const int64_t cx = pg->col[cell] + cf->cmin, cy = row + cf->cmin;
+            const int64_t cx = pg->col[cell], cy = row;
             for (size_t i = a; i < z; i++)
             {
                 if (wm_cancelled(cf->ctx))
@@ -470,6 +492,7 @@ wm_status wm_corners_find(wm_probe *probe, const wm_field *f, const wm_ctx *ctx)
     free(cf.pr);
     wm_cells_free(&cf.pg);
     free(cf.pb);
+    free(cf.pc);
     free(cf.cand);
     return st;
 }
