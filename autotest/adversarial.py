@@ -647,6 +647,33 @@ def make_scene(path, family, seed, pixel_size=PIXEL_SIZE, block_size=BLOCK_SIZE)
             'WIDTH_FIELD': 'width', 'PIXEL_SIZE': pixel_size, 'BLOCK_SIZE': block_size}
 
 
+def densify(path, step_px, pixel_size=PIXEL_SIZE):
+    """Rewrites the rivers and lakes of the scene at `path` with a vertex
+    every `step_px` pixels along their edges (OGR's Segmentize), every
+    vertex snapped to the lattice as make_scene's are, so that the oracle
+    reads what the driver reads: many nearly collinear pieces (the new
+    vertices lie within half a unit of their edge), the inputs of an
+    over-dense line or a densified export."""
+    unit = pixel_size / LATTICE_Q
+
+    def snap(g):
+        for k in range(g.GetGeometryCount()):
+            snap(g.GetGeometryRef(k))
+        for i in range(g.GetPointCount()):
+            g.SetPoint_2D(i, round(g.GetX(i) / unit) * unit, round(g.GetY(i) / unit) * unit)
+    ds = ogr.Open(path, update=1)
+    for name in ('rivers', 'lakes'):
+        lyr = ds.GetLayerByName(name)
+        for fid in [f.GetFID() for f in lyr]:
+            f = lyr.GetFeature(fid)
+            g = f.GetGeometryRef().Clone()
+            g.Segmentize(step_px * pixel_size)
+            snap(g)
+            f.SetGeometry(g)
+            lyr.SetFeature(f)
+    ds = None
+
+
 def describe(family, seed, pixel_size=PIXEL_SIZE, block_size=BLOCK_SIZE):
     """One line describing the scene (for reports and failure messages)."""
     meta = scene_features(family, seed, pixel_size, block_size)[2]

@@ -4,14 +4,16 @@
     /usr/bin/python3 bench/topology.py [--seeds 50] [--first-seed 0]
         [--families wedge,parallel,island,subpixel,seam]
         [--option KEY=VALUE]... [--build DIR] [--cli] [--json out.json]
-        [--worst 3] [--keep DIR]
+        [--worst 3] [--keep DIR] [--densify PX]
 
 For each family of autotest/adversarial.py and each seed, writes the scene,
 runs watermesh on it (in this process through the GDAL driver, or with
 --cli through <build>/gdal_watermesh, which survives a crash of the
 driver) with SIMPLIFY=0, METHOD=CONTOUR, NUM_THREADS=1 (then every
 --option, which may override them; PIXEL_SIZE / BLOCK_SIZE also scale the
-scenes), computes the GEOS oracle (autotest/oracle.py: exact buffer and
+scenes; --densify PX puts a vertex every PX pixels along every river and
+lake edge of the scene first, snapped to the lattice: adversarial.densify),
+computes the GEOS oracle (autotest/oracle.py: exact buffer and
 dissolve, clipped to the blocks) and prints one Markdown table, a row per
 family:
 
@@ -96,6 +98,8 @@ def parse_args(argv):
     ap.add_argument('--json', default=None, help='write the per-scene figures there')
     ap.add_argument('--worst', type=int, default=3, help='worst seeds listed per family')
     ap.add_argument('--keep', default=None, help='keep the scenes in this folder')
+    ap.add_argument('--densify', type=float, default=0, metavar='PX',
+                    help='a vertex every PX pixels along the inputs (default: none)')
     args = ap.parse_args(argv)
     opts = {}
     for o in args.option:
@@ -188,6 +192,8 @@ def measure_scene(family, seed, args, workdir, px, B):
     tag = '%s_%d' % (family, seed)
     path = os.path.join(workdir, tag + '.gpkg')
     opts = adversarial.make_scene(path, family, seed, pixel_size=px, block_size=B)
+    if args.densify > 0:
+        adversarial.densify(path, args.densify, px)
     opts.update({'SIMPLIFY': 0, 'METHOD': 'CONTOUR', 'NUM_THREADS': 1})
     opts.update(args.options)
     rec = dict(family=family, seed=seed)
@@ -277,9 +283,10 @@ def main(argv=None):
         os.makedirs(workdir, exist_ok=True)
         seeds = range(args.first_seed, args.first_seed + args.seeds)
         shown = dict({'SIMPLIFY': 0, 'METHOD': 'CONTOUR', 'NUM_THREADS': 1}, **args.options)
-        print('build %s%s (%s); options %s; seeds %d..%d; PIXEL_SIZE %g, BLOCK_SIZE %g\n'
+        print('build %s%s (%s); options %s; seeds %d..%d; PIXEL_SIZE %g, BLOCK_SIZE %g%s\n'
               % (args.build, _commit(args.build), 'CLI' if args.cli else 'driver in process',
-                 ' '.join('%s=%s' % kv for kv in sorted(shown.items())), seeds[0], seeds[-1], px, B))
+                 ' '.join('%s=%s' % kv for kv in sorted(shown.items())), seeds[0], seeds[-1], px, B,
+                 '; inputs densified every %g px' % args.densify if args.densify > 0 else ''))
         sys.stdout.flush()
         tty = sys.stderr.isatty()
         rows, all_recs, notes = [], [], []
@@ -320,6 +327,7 @@ def main(argv=None):
         if args.json:
             with open(args.json, 'w', encoding='utf-8') as f:
                 json.dump(dict(build=args.build, options=args.options, px=px, block_size=B,
+                               densify_px=args.densify,
                                seeds=[seeds[0], seeds[-1]], header=HEADER, rows=rows,
                                scenes=all_recs), f, indent=1, default=str)
         return 0
