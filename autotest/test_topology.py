@@ -362,7 +362,13 @@ RING_SCENES = ['twins-135011@1:128', 'twins-135410@1:128', 'mosaic-135325',
                'spike-138212@5:640', 'spike-138229@5:640',
                'mosaic-139109@1.5:192', 'mosaic-139300@0.6:76.8',
                'spike-140638@8:1024', 'mosaic-141419@2.5:320',
-               'grid-142216@3:384', 'grid-142233@3:384']
+               'grid-142216@3:384', 'grid-142233@3:384',
+               # a meander with a vertex every 0.17 px, thinned to 1/16 px as
+               # it was read, off a lake whose corner reached 1.4 units into
+               # it (the lake a separate speck, subpixel seed 146706 at 12 m,
+               # where the lake is no longer sub-pixel and apart) or over a
+               # lake's island (lost, 146707): wm_ingest.c's DENSE_PER_PX
+               'subpixel-146706@12:1536', 'subpixel-146707@12:1536']
 
 
 @pytest.mark.parametrize('scene', SCENE_IDS + RING_SCENES, indirect=True)
