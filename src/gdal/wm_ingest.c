@@ -368,9 +368,9 @@ static int read_points(builder *b, OGRGeometryH g, const feat_ctx *fc)
  * vertices per pixel of its length is thinned: Douglas-Peucker keeps the
  * vertices farther than DENSE_TOL (1/16 pixel) from the kept line. A line
  * that dense (GPS traces, lines traced from rasters or LiDAR) otherwise
- * costs the field, the sub-pixel search and the corner search per vertex
- * (the corner search per pair of them: ten vertices per pixel made a
- * scene 60 times slower); the union of the capsules moves by at most
+ * costs the field, the sub-pixel search and the corner searches per
+ * vertex (read as they were, ten vertices per pixel made the synthetic
+ * scenes 60 times slower); the union of the capsules moves by at most
  * DENSE_TOL. A sparser run is read as it is: thinning moves the river's
  * bank against the other inputs, and opened or closed land features
  * narrower than that (a meander with a vertex every 0.17 pixel, at 12 m
