@@ -132,23 +132,27 @@ static int follows_boundary(wm_probe *in, wm_pt a, wm_pt c, wm_pt b)
 
 /* ---- ring edges in a grid --------------------------------------------- */
 
-#define RCELL (16 * WM_Q) /* ring grid cell: 16 pixels */
+/* Ring grid cells: 16 pixels, smaller where the rings are dense (see
+ * ring_cell). */
+#define RCELL (16 * WM_Q)
 /* Farthest a corner is looked for from the sampled rings: the tip of a
  * 5 degree wedge (pixel / (2 tan 2.5 deg) = 11.5 px) is within reach. */
 #define WM_CREASE_REACH (16 * WM_Q)
 
 /* The rings' edges by cell of a grid over the block. With an
- * `active` mask only the marked cells hold their edges: a later pass looks
- * only near the corners just inserted, and a query reaching an unmarked
- * cell completes the grid first (visit_edges), so a query never misses an
- * edge. */
+ * `active` mask (of RCELL cells, each covering whole grid cells) only the
+ * marked cells hold their edges: a later pass looks only near the corners
+ * just inserted, and a query reaching an unmarked cell completes the grid
+ * first (visit_edges), so a query never misses an edge. */
 typedef struct
 {
     const wm_rings *r;
     wm_cells cells;    /* edge k = from vertex k to its successor; its
                           side is the grid's */
+    int32_t cell;      /* cell side, lattice units (RCELL >> k) */
+    int32_t aside;     /* active's side: S / RCELL + 1 */
     uint32_t *ring_of; /* vertex -> ring */
-    uint8_t *active;   /* side*side, or NULL: every cell registered (owned) */
+    uint8_t *active;   /* aside^2, or NULL: every cell registered (owned) */
 } ringgrid;
 
 static size_t succ(const wm_rings *r, const uint32_t *ring_of, size_t k)
@@ -167,23 +171,37 @@ static int32_t cell_of(const ringgrid *g, int32_t v)
 {
     if (v < 0)
         return 0;
-    const int32_t c = v / RCELL; /* v >= 0: a shift */
+    const int32_t c = v / g->cell; /* v >= 0: a shift */
     return c >= g->cells.side ? g->cells.side - 1 : c;
 }
 
-/* Whether a cell of [x0, x1] x [y0, y1] (lattice box) is registered. */
+/* The cell of the active mask holding lattice coordinate v. */
+static int32_t mask_of(const ringgrid *g, int32_t v)
+{
+    if (v < 0)
+        return 0;
+    const int32_t c = v / RCELL;
+    return c >= g->aside ? g->aside - 1 : c;
+}
+
+/* Whether every cell (every = 1) or some cell (every = 0) of the mask over
+ * [x0, x1] x [y0, y1] (lattice box) is marked. */
 static int box_active(const ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
-                      int32_t y1)
+                      int32_t y1, int every)
 {
     if (!g->active)
         return 1;
-    const int32_t cx0 = cell_of(g, x0), cx1 = cell_of(g, x1);
-    const int32_t cy0 = cell_of(g, y0), cy1 = cell_of(g, y1);
+    const int32_t cx0 = mask_of(g, x0), cx1 = mask_of(g, x1);
+    const int32_t cy0 = mask_of(g, y0), cy1 = mask_of(g, y1);
     for (int32_t cy = cy0; cy <= cy1; cy++)
         for (int32_t cx = cx0; cx <= cx1; cx++)
-            if (g->active[(size_t)cy * (size_t)g->cells.side + (size_t)cx])
-                return 1;
-    return 0;
+        {
+            const int marked =
+                g->active[(size_t)cy * (size_t)g->aside + (size_t)cx] != 0;
+            if (marked != every)
+                return marked;
+        }
+    return every;
 }
 
 /* Cells cb = {x0, y0, x1, y1} of the box of edge a-b. */
@@ -222,7 +240,7 @@ static wm_status fill_ringgrid(ringgrid *g)
                     y0 = p.y < y0 ? p.y : y0;
                     y1 = p.y > y1 ? p.y : y1;
                 }
-                if (!box_active(g, x0, y0, x1, y1))
+                if (!box_active(g, x0, y0, x1, y1, 0))
                     continue;
             }
             for (size_t k = k0; k < k1; k++)
@@ -232,8 +250,9 @@ static wm_status fill_ringgrid(ringgrid *g)
                 for (int32_t cy = cb[1]; cy <= cb[3]; cy++)
                     for (int32_t cx = cb[0]; cx <= cb[2]; cx++)
                         if ((!g->active ||
-                             g->active[(size_t)cy * (size_t)g->cells.side +
-                                       (size_t)cx]) &&
+                             g->active[(size_t)(cy * g->cell / RCELL) *
+                                           (size_t)g->aside +
+                                       (size_t)(cx * g->cell / RCELL)]) &&
                             !wm_cells_add(&g->cells, cx, cy, (uint32_t)k))
                             return WM_ERR_NOMEM;
             }
@@ -245,10 +264,12 @@ static wm_status fill_ringgrid(ringgrid *g)
 /* The grid of rings r over a block of side S: every edge registered, or
  * (active != NULL, owned by the grid from here on) those in its cells. */
 static wm_status build_ringgrid(ringgrid *g, const wm_rings *r, int32_t S,
-                                uint8_t *active)
+                                int32_t cell, uint8_t *active)
 {
     g->r = r;
-    wm_cells_reset(&g->cells, S / RCELL + 1);
+    g->cell = cell;
+    g->aside = S / RCELL + 1;
+    wm_cells_reset(&g->cells, S / cell + 1);
     g->active = active;
     g->ring_of = malloc((r->npts + 1) * sizeof *g->ring_of);
     if (!g->ring_of || r->npts >= UINT32_MAX)
@@ -273,18 +294,15 @@ static void free_ringgrid(ringgrid *g)
 static int visit_edges(ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
                        int32_t y1, int (*fn)(void *, size_t), void *arg)
 {
+    if (!box_active(g, x0, y0, x1, y1, 1))
+    {
+        free(g->active);
+        g->active = NULL;
+        if (fill_ringgrid(g) != WM_OK)
+            return -1;
+    }
     const int32_t cx0 = cell_of(g, x0), cx1 = cell_of(g, x1);
     const int32_t cy0 = cell_of(g, y0), cy1 = cell_of(g, y1);
-    for (int32_t cy = cy0; g->active && cy <= cy1; cy++)
-        for (int32_t cx = cx0; cx <= cx1; cx++)
-            if (!g->active[(size_t)cy * (size_t)g->cells.side + (size_t)cx])
-            {
-                free(g->active);
-                g->active = NULL;
-                if (fill_ringgrid(g) != WM_OK)
-                    return -1;
-                break;
-            }
     for (int32_t cy = cy0; cy <= cy1; cy++)
     {
         size_t b, e;
@@ -499,11 +517,32 @@ static void mark_cells(uint8_t *a, int32_t side, int32_t x0, int32_t y0,
                    (size_t)(x1 - x0 + 1));
 }
 
-/* The ring grid cells a pass needs (owned by the caller): around the
- * corners cs[todo[0 .. ntodo)] it tries. Searches reach WM_CREASE_REACH
- * (one cell) around a candidate and the edges it may split a little
- * farther: two cells of margin cover that (a query beyond them completes
- * the grid). NULL when out of memory. */
+/* The ring grid's cell for rings of npts points in a block of side S
+ * (lattice units): RCELL, halved down to an eighth of a pixel while the
+ * rings hold more than 4 points per cell of the grid (so the grid has at
+ * most about npts / 2 cells; wm_cells allows 65535 a side). A query visits
+ * every edge of the cells its box touches: at coarse pixels, where
+ * sub-pixel rivers give the rings many points per pixel, 16-pixel cells
+ * made the nearest-edge searches the run's main cost (Andorra at 50 m
+ * pixels). Which edges a query reports does not depend on the cell. */
+static int32_t ring_cell(size_t npts, int32_t S)
+{
+    int32_t cell = RCELL;
+    while (cell > WM_Q / 8 && S / (cell / 2) + 1 <= 65535)
+    {
+        const double side = (double)(S / cell + 1);
+        if ((double)npts <= 4.0 * side * side)
+            break;
+        cell /= 2;
+    }
+    return cell;
+}
+
+/* The ring grid's active mask a pass needs (owned by the caller): around
+ * the corners cs[todo[0 .. ntodo)] it tries. Searches reach
+ * WM_CREASE_REACH (one mask cell) around a candidate and the edges it may
+ * split a little farther: two cells of margin cover that (a query beyond
+ * them completes the grid). NULL when out of memory. */
 static uint8_t *pass_cells(const corner *cs, const size_t *todo, size_t ntodo,
                            int32_t S)
 {
@@ -589,10 +628,11 @@ static int place_corner(wm_probe *in, ringgrid *g, corner *cd, pass_ins *pi)
     const wm_rings *rings = g->r;
     const int32_t S = in->s->n * WM_Q;
     const wm_pt c = cd->c;
-    /* nearest edges: a small search first (most corners are already within
-     * a quarter pixel of one) */
+    /* nearest edges: within a quarter pixel first (most corners have
+     * one; every edge that near is visited, so the nearest is the nearest
+     * of all) */
     nearest nr = {g, c.x, c.y, {0}, {0}, 0, S};
-    int32_t R = WM_Q;
+    int32_t R = WM_Q / 4;
     if (visit_edges(g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn, &nr) < 0)
         return -1;
     if (nr.n > 0 && nr.best[0] <= WM_Q / 4.0)
@@ -610,6 +650,10 @@ static int place_corner(wm_probe *in, ringgrid *g, corner *cd, pass_ins *pi)
     }
     /* the nearest edges within a pixel, then (none taking the corner)
      * within WM_CREASE_REACH */
+    R = WM_Q;
+    nr.n = 0;
+    if (visit_edges(g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn, &nr) < 0)
+        return -1;
     size_t ka = SIZE_MAX;
     for (int pass = nr.n ? 0 : 1; pass < 2 && ka == SIZE_MAX; pass++)
     {
@@ -737,9 +781,10 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
     pass_ins pi = {NULL, 0, 0, NULL};
     ringgrid g;
     memset(&g, 0, sizeof g);
+    const int32_t cell = ring_cell(rings->npts, S);
     uint8_t *active = pass_cells(cs, todo, ntodo, S);
     /* the grid owns active */
-    int ok = active && build_ringgrid(&g, rings, S, active) == WM_OK &&
+    int ok = active && build_ringgrid(&g, rings, S, cell, active) == WM_OK &&
              (pi.split = calloc(rings->npts + 1, 1)) != NULL;
     for (size_t q = 0; ok && q < ntodo; q++)
         ok = place_corner(in, &g, &cs[todo[q]], &pi) == 0;
