@@ -18,9 +18,10 @@ extern "C"
 
     /**
      * The inputs in reach of one block, with an index of its river segments
-     * by 16-pixel cell. The inputs and indexes are read-only after
-     * wm_probe_init; what the block's stages find once and share (corners,
-     * rebuilt cells) and the query scratch are written later.
+     * by cell (16 pixels, or 8 or 4 in a block of many items). The inputs
+     * and indexes are read-only after wm_probe_init; what the block's
+     * stages find once and share (corners, rebuilt cells) and the query
+     * scratch are written later.
      */
     /** A lake edge of a probe: scene edge e of polygon slot k (an index
      *  into the probe's polys). */
@@ -44,6 +45,7 @@ extern "C"
          *  cells its box grown by radius + WM_PROBE_REACH touches; segments
          *  touching too many cells are in `wide` instead (owned) */
         wm_cells cells;
+        int32_t cell; /**< the indexes' cell side, lattice units */
         uint32_t *wide;
         size_t nwide;
         /* lake edges of the block's polygons, built by wm_probe_init:
