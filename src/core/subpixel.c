@@ -579,25 +579,42 @@ static int seed_corner(wm_hidden *h, const wm_field *f, wm_probe *probe,
     return 1;
 }
 
+/* The key of the window of 2 x 2 cells whose lower left cell is (c, r),
+ * -1 <= c, r. */
+static uint64_t window_key(int32_t c, int32_t r)
+{
+    return (uint64_t)(uint32_t)(r + 1) << 32 | (uint32_t)(c + 1);
+}
+
 /* Seeds the corners of the union that join neither two capsules sharing
  * an end nor two edges of one lake sharing a vertex (probe->corner_joint
- * is 0) in the cells holding two or more of them, and makes those cells
- * ambiguous. A boundary component inside one cell meets no edge of the
- * sample grid; unless it is an input smaller than two pixels (seeded as
- * such) it is bounded by arcs of several capsules and lake edges, and all
- * its corners lie in the cell. Group the primitives that share ends: two
- * capsules sharing an end are convex and meet, so a group of them encloses
- * nothing unless it closes a loop, and a lake's edges close its own ring
- * (the exceptions, see architecture.md); a boundary that goes from one
- * group to another comes back, so it has two corners at least that are
- * not joint. This holds wherever the component lies in the cell, even
- * within a quarter pixel of the cell's segment (off_contour), and does not
- * depend on which corners of shared ends a job finds. */
+ * is 0), two or more of them in one window of 2 x 2 cells, in the cells
+ * holding them, and makes those cells ambiguous. A boundary component
+ * narrower and lower than a pixel lies in such a window (its extent meets
+ * two columns of cells at most, and two rows); unless it is an input
+ * smaller than two pixels (seeded as such) it is bounded by arcs of
+ * several capsules and lake edges, and all its corners lie in the window.
+ * Group the primitives that share ends: two capsules sharing an end are
+ * convex and meet, so a group of them encloses nothing unless it closes a
+ * loop, and a lake's edges close its own ring (the exceptions, see
+ * architecture.md); a boundary that goes from one group to another comes
+ * back, so it has two corners at least that are not joint. This holds
+ * wherever the component lies, even within a quarter pixel of the cells'
+ * segments (off_contour) and across the sides of its cells where the
+ * screen searched none (an island crossing the side between its two cells
+ * as three crossings of a side whose samples differ, not loose: spike seed
+ * 152138 at 3 m), and does not depend on which corners of shared ends a
+ * job finds. */
 static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
-    seedkey *o = malloc((4 * probe->ncorner + 1) * sizeof *o);
-    if (!o)
+    seedkey *o = malloc((16 * probe->ncorner + 1) * sizeof *o);
+    uint8_t *state = calloc(probe->ncorner + 1, 1); /* 1 seed, 2 buried */
+    if (!o || !state)
+    {
+        free(o);
+        free(state);
         return 0;
+    }
     size_t n = 0;
     for (size_t i = 0; i < probe->ncorner; i++)
     {
@@ -606,33 +623,50 @@ static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
                           ? 0
                           : cells_holding(f, probe->corner[i].x,
                                           probe->corner[i].y, c, r);
+        const size_t n0 = n;
         for (int j = 0; j < k; j++)
-            o[n++] = (seedkey){wm_field_cell_key(f, c[j], r[j]), i};
+            for (int dy = -1; dy <= 0; dy++)
+                for (int dx = -1; dx <= 0; dx++)
+                {
+                    const uint64_t key = window_key(c[j] + dx, r[j] + dy);
+                    int seen = 0;
+                    for (size_t q = n0; q < n && !seen; q++)
+                        seen = o[q].key == key;
+                    if (!seen)
+                        o[n++] = (seedkey){key, i};
+                }
     }
     qsort(o, n, sizeof *o, cmp_seedkey);
-    int ok = 1;
-    for (size_t a = 0, z; ok && a < n; a = z)
+    for (size_t a = 0, z; a < n; a = z)
     {
         for (z = a + 1; z < n && o[z].key == o[a].key; z++)
             ;
-        if (z - a < 2)
-            continue;
         size_t kept = 0;
-        for (size_t i = a; i < z; i++)
+        for (size_t i = a; i < z && z - a >= 2; i++)
         {
-            if (buried(probe, probe->corner[o[i].i]))
-                o[i].i = SIZE_MAX; /* not a seed */
-            else
-                kept++;
+            uint8_t *st = &state[o[i].i];
+            if (!(*st & 2) && buried(probe, probe->corner[o[i].i]))
+                *st = 2;
+            kept += !(*st & 2);
         }
-        int32_t c, r;
-        cell_of(f, o[a].key, &c, &r);
-        for (size_t i = a; ok && kept >= 2 && i < z; i++)
-            if (o[i].i != SIZE_MAX)
-                ok = seed_cell(h, f, probe->corner[o[i].i].x,
-                               probe->corner[o[i].i].y, c, r, 1);
+        for (size_t i = a; kept >= 2 && i < z; i++)
+            if (!(state[o[i].i] & 2))
+                state[o[i].i] = 1;
+    }
+    int ok = 1;
+    for (size_t i = 0; ok && i < probe->ncorner; i++)
+    {
+        if (state[i] != 1)
+            continue;
+        int32_t c[4], r[4];
+        const int k =
+            cells_holding(f, probe->corner[i].x, probe->corner[i].y, c, r);
+        for (int j = 0; ok && j < k; j++)
+            ok = seed_cell(h, f, probe->corner[i].x, probe->corner[i].y, c[j],
+                           r[j], 1);
     }
     free(o);
+    free(state);
     return ok;
 }
 
