@@ -156,8 +156,8 @@ static int follows_boundary(wm_probe *in, wm_pt a, wm_pt c, wm_pt b)
 
 /* ---- ring edges in a grid --------------------------------------------- */
 
-/* Ring grid cells: 16 pixels, smaller where the rings are dense (see
- * ring_cell). */
+/* Ring grid cells: 16 pixels, smaller where the rings are dense
+ * (insert_pass). */
 #define RCELL (16 * WM_Q)
 /* Farthest a corner is looked for from the sampled rings: the tip of a
  * 5 degree wedge (pixel / (2 tan 2.5 deg) = 11.5 px) is within reach. */
@@ -541,27 +541,6 @@ static void mark_cells(uint8_t *a, int32_t side, int32_t x0, int32_t y0,
                    (size_t)(x1 - x0 + 1));
 }
 
-/* The ring grid's cell for rings of npts points in a block of side S
- * (lattice units): RCELL, halved down to an eighth of a pixel while the
- * rings hold more than 4 points per cell of the grid (so the grid has at
- * most about npts / 2 cells; wm_cells allows 65535 a side). A query visits
- * every edge of the cells its box touches: at coarse pixels, where
- * sub-pixel rivers give the rings many points per pixel, 16-pixel cells
- * made the nearest-edge searches the run's main cost (Andorra at 50 m
- * pixels). Which edges a query reports does not depend on the cell. */
-static int32_t ring_cell(size_t npts, int32_t S)
-{
-    int32_t cell = RCELL;
-    while (cell > WM_Q / 8 && S / (cell / 2) + 1 <= 65535)
-    {
-        const double side = (double)(S / cell + 1);
-        if ((double)npts <= 4.0 * side * side)
-            break;
-        cell /= 2;
-    }
-    return cell;
-}
-
 /* The ring grid's active mask a pass needs (owned by the caller): around
  * the corners cs[todo[0 .. ntodo)] it tries. Searches reach
  * WM_CREASE_REACH (one mask cell) around a candidate and the edges it may
@@ -805,7 +784,12 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
     pass_ins pi = {NULL, 0, 0, NULL};
     ringgrid g;
     memset(&g, 0, sizeof g);
-    const int32_t cell = ring_cell(rings->npts, S);
+    /* cells down to an eighth of a pixel where the rings are dense: at
+     * coarse pixels, where sub-pixel rivers give them many points per
+     * pixel, 16-pixel cells made the nearest-edge searches the run's main
+     * cost (Andorra at 50 m pixels); which edges a query reports does not
+     * depend on the cell */
+    const int32_t cell = wm_cells_fit(rings->npts, S, RCELL, WM_Q / 8);
     uint8_t *active = pass_cells(cs, todo, ntodo, S);
     /* the grid owns active */
     int ok = active && build_ringgrid(&g, rings, S, cell, active) == WM_OK &&

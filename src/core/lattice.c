@@ -210,6 +210,19 @@ void wm_cells_reset(wm_cells *g, int32_t side)
     g->nocc = 0;
 }
 
+int32_t wm_cells_fit(size_t n, int32_t S, int32_t largest, int32_t least)
+{
+    int32_t cell = largest;
+    while (cell > least && S / (cell / 2) + 1 <= 65535)
+    {
+        const double side = (double)(S / cell + 1);
+        if ((double)n <= 4.0 * side * side)
+            break;
+        cell /= 2;
+    }
+    return cell;
+}
+
 /* Bits of a radix digit: 2^11 counters stay in the L1 cache. */
 #define CELL_DIGIT 11
 

@@ -1018,28 +1018,20 @@ double wm_probe_min_radius(const wm_probe *p, int32_t x0, int32_t y0,
 }
 
 /* The indexes' cell for probe p (its items listed) over a block of side
- * S: DCELL, halved down to 4 pixels (the reach every item is grown by)
- * while the block has more than 4 river segments and lake edges per cell.
- * A query reads the items of one cell: at coarse pixels, where dense
- * rivers put hundreds of segments in a 16-pixel cell, 4-pixel cells made
- * Andorra at 50 m pixels 6-12 % faster. Which items a query finds within
- * its reach does not depend on the cell (wm_probe_min_radius reads the
- * items registered in the cells over a box, a superset of those in reach:
+ * S: DCELL, down to 4 pixels (the reach every item is grown by) where the
+ * block has many river segments and lake edges (wm_cells_fit). A query
+ * reads the items of one cell: at coarse pixels, where dense rivers put
+ * hundreds of segments in a 16-pixel cell, 4-pixel cells made Andorra at
+ * 50 m pixels 6-12 % faster. Which items a query finds within its reach
+ * does not depend on the cell (wm_probe_min_radius reads the items
+ * registered in the cells over a box, a superset of those in reach:
  * smaller cells only tighten its bound). */
 static int32_t probe_cell(const wm_scene *s, const wm_probe *p, int32_t S)
 {
     size_t nitems = p->nsegs;
     for (size_t k = 0; k < p->npolys; k++)
         nitems += s->poly_start[p->polys[k] + 1] - s->poly_start[p->polys[k]];
-    int32_t cell = DCELL;
-    while (cell > 4 * WM_Q)
-    {
-        const double side = (double)(S / cell + 1);
-        if ((double)nitems <= 4.0 * side * side)
-            break;
-        cell /= 2;
-    }
-    return cell;
+    return wm_cells_fit(nitems, S, DCELL, 4 * WM_Q);
 }
 
 wm_status wm_probe_init(wm_probe *p, const wm_scene *s, int64_t bx, int64_t by)

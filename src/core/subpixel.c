@@ -607,8 +607,14 @@ static uint64_t window_key(int32_t c, int32_t r)
  * job finds. */
 static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
 {
-    seedkey *o = malloc((16 * probe->ncorner + 1) * sizeof *o);
-    uint8_t *state = calloc(probe->ncorner + 1, 1); /* 1 seed, 2 buried */
+    enum
+    {
+        OPEN,
+        SEED,
+        BURIED
+    };
+    seedkey *o = malloc((9 * probe->ncorner + 1) * sizeof *o);
+    uint8_t *state = calloc(probe->ncorner + 1, 1);
     if (!o || !state)
     {
         free(o);
@@ -623,40 +629,37 @@ static int crowded_cells(wm_hidden *h, const wm_field *f, wm_probe *probe)
                           ? 0
                           : cells_holding(f, probe->corner[i].x,
                                           probe->corner[i].y, c, r);
-        const size_t n0 = n;
-        for (int j = 0; j < k; j++)
-            for (int dy = -1; dy <= 0; dy++)
-                for (int dx = -1; dx <= 0; dx++)
-                {
-                    const uint64_t key = window_key(c[j] + dx, r[j] + dy);
-                    int seen = 0;
-                    for (size_t q = n0; q < n && !seen; q++)
-                        seen = o[q].key == key;
-                    if (!seen)
-                        o[n++] = (seedkey){key, i};
-                }
+        if (k == 0)
+            continue;
+        /* its cells are adjacent (one, two or four): the windows holding
+         * any of them, each once */
+        for (int32_t wr = r[0] - 1; wr <= r[k - 1]; wr++)
+            for (int32_t wc = c[0] - 1; wc <= c[k - 1]; wc++)
+                o[n++] = (seedkey){window_key(wc, wr), i};
     }
     qsort(o, n, sizeof *o, cmp_seedkey);
     for (size_t a = 0, z; a < n; a = z)
     {
         for (z = a + 1; z < n && o[z].key == o[a].key; z++)
             ;
+        if (z - a < 2)
+            continue;
         size_t kept = 0;
-        for (size_t i = a; i < z && z - a >= 2; i++)
+        for (size_t i = a; i < z; i++)
         {
             uint8_t *st = &state[o[i].i];
-            if (!(*st & 2) && buried(probe, probe->corner[o[i].i]))
-                *st = 2;
-            kept += !(*st & 2);
+            if (*st == OPEN && buried(probe, probe->corner[o[i].i]))
+                *st = BURIED;
+            kept += *st != BURIED;
         }
         for (size_t i = a; kept >= 2 && i < z; i++)
-            if (!(state[o[i].i] & 2))
-                state[o[i].i] = 1;
+            if (state[o[i].i] != BURIED)
+                state[o[i].i] = SEED;
     }
     int ok = 1;
     for (size_t i = 0; ok && i < probe->ncorner; i++)
     {
-        if (state[i] != 1)
+        if (state[i] != SEED)
             continue;
         int32_t c[4], r[4];
         const int k =

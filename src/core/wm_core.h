@@ -180,6 +180,13 @@ extern "C"
     /** Empties g for a grid of side x side cells (keeps its memory). */
     void wm_cells_reset(wm_cells *g, int32_t side);
 
+    /** The cell side (lattice units) for a grid over a square of side S
+     *  holding n items: `largest`, halved down to `least` while there are
+     *  more than 4 items per cell and the grid stays within 65535 cells a
+     *  side. A query of such a grid reads whole cells: where the items are
+     *  dense (coarse pixels), smaller cells read fewer. */
+    int32_t wm_cells_fit(size_t n, int32_t S, int32_t largest, int32_t least);
+
     /** Adds `item` to cell (x, y), 0 <= x, y < side. Returns 0 when out of
      *  memory. */
     static inline int wm_cells_add(wm_cells *g, int32_t x, int32_t y,
