@@ -52,16 +52,23 @@ interest" whose exact shape the lattice cannot resolve by sampling alone:
             of half-angle 0.3-15 degrees), a notch of land as sharp cut
             into it, or two lobes joined by a channel 0.05-1.5 px wide;
             half the time a river passing by or through.
+  cluster   2-6 short rivers (2-4 vertices, 0.05-2 px wide, log-uniform)
+            and 0-3 lakes (0.1-3 px across, 3-8 vertices) at random within
+            a square of 1, 2 or 4 px: many sub-pixel features, crossings,
+            islands, wedges and near misses in a few cells at once; two
+            times in five on a block side or corner (placed as the seam
+            family's).
   seam      one of the four above with its feature of interest moved onto a
             block side (or, one time in five, a block corner): exactly on it
             one time in four, else within +-0.4 of the feature's size (at
             least +-0.5 px) of it.
 
-Outside the seam and grid families the feature of interest lies inside
-block (0, 0) of the scene (origin ORIGIN, a corner of the global 64 m block
-grid), at least 12 m from its sides; long rivers still cross other blocks.
-The grid family's lies on a block corner, the seam family's on a side or a
-corner of the grid of its own block size.
+Outside the seam, grid and cluster families the feature of interest lies
+inside block (0, 0) of the scene (origin ORIGIN, a corner of the global 64 m
+block grid), at least 12 m from its sides; long rivers still cross other
+blocks. The grid family's lies on a block corner, the seam family's (and two
+in five of the cluster family's) on a side or a corner of the grid of its
+own block size.
 
 All vertex coordinates are snapped to the driver's lattice (PIXEL_SIZE /
 256, exactly representable in binary), so the driver and the GEOS oracle see
@@ -101,7 +108,7 @@ EPSG = scenes.SCENE_EPSG  # 32631
 ORIGIN = (400000.0, 4699968.0)
 
 BASE_FAMILIES = ('wedge', 'parallel', 'island', 'subpixel')
-FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic', 'twins', 'spike')
+FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic', 'twins', 'spike', 'cluster')
 
 
 # ----------------------------------------------------------------------------
@@ -547,9 +554,31 @@ def _spike(rng, px):
     return rivers, lakes, meta
 
 
+def _cluster(rng, px):
+    """2-6 short rivers and 0-3 small lakes at random within a square of
+    1, 2 or 4 px."""
+    span = rng.choice((1.0, 2.0, 4.0)) * px
+    rivers, lakes = [], []
+    for _ in range(rng.randint(2, 6)):
+        a = rng.uniform(0, 2 * math.pi)
+        c = (rng.uniform(-span, span) / 2, rng.uniform(-span, span) / 2)
+        length = rng.uniform(0.5, 6.0) * span
+        n = rng.randint(2, 4)
+        pts = []
+        for k in range(n):
+            t = -length / 2 + length * k / (n - 1)
+            pts.append((c[0] + t * math.cos(a) + rng.uniform(-0.2, 0.2) * span,
+                        c[1] + t * math.sin(a) + rng.uniform(-0.2, 0.2) * span))
+        rivers.append((pts, _log_uniform(rng, 0.05, 2.0) * px))
+    for _ in range(rng.randint(0, 3)):
+        lakes.append((_ngon(rng, rng.uniform(-span, span) / 2, rng.uniform(-span, span) / 2,
+                            _log_uniform(rng, 0.1, 3.0) * px, rng.randint(3, 8), rough=0.4), []))
+    return rivers, lakes, dict(kind='cluster', span_px=span / px, scale=span)
+
+
 _GENERATORS = {'wedge': _wedge, 'parallel': _parallel, 'island': _island,
                'subpixel': _subpixel, 'shore': _shore, 'mosaic': _mosaic,
-               'twins': _twins, 'spike': _spike}
+               'twins': _twins, 'spike': _spike, 'cluster': _cluster}
 
 
 # ----------------------------------------------------------------------------
@@ -577,7 +606,7 @@ def scene_features(family, seed, pixel_size=PIXEL_SIZE, block_size=BLOCK_SIZE,
         raise ValueError('unknown family %r (one of %s)' % (family, ', '.join(FAMILIES)))
     rng = random.Random('%s:%d' % (family, seed))
     B = block_size
-    if family in ('seam', 'grid'):  # a corner of this block size's grid
+    if family in ('seam', 'grid', 'cluster'):  # a corner of this block size's grid
         origin = (math.floor(origin[0] / B) * B, math.floor(origin[1] / B) * B)
     if family == 'grid':
         rivers, lakes, meta = _grid(rng, pixel_size, B)
@@ -588,7 +617,7 @@ def scene_features(family, seed, pixel_size=PIXEL_SIZE, block_size=BLOCK_SIZE,
     lo, hi = 0.1875 * B, 0.8125 * B  # 12 .. 52 m inside a 64 m block
     if family == 'grid':
         ax = ay = B
-    elif family == 'seam':
+    elif family == 'seam' or (family == 'cluster' and rng.random() < 0.4):
         where = rng.choice(('x', 'y', 'x', 'y', 'corner'))
         ax = B if where in ('x', 'corner') else rng.uniform(lo, hi)
         ay = B if where in ('y', 'corner') else rng.uniform(lo, hi)

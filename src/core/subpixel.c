@@ -1273,16 +1273,6 @@ static int64_t along(const rect *q, wm_pt p, int side)
     }
 }
 
-/* Emits each out crossing of x[0 .. k) with its mate. */
-static int pair_mates(walker *w, const rect *q, const xing *x, int k,
-                      const int *mate)
-{
-    for (int i = 0; i < k; i++)
-        if (x[i].out && !emit_pair(w, q, &x[i], &x[mate[i]]))
-            return 0;
-    return 1;
-}
-
 /* Pairs on one side in pairing `mate`. */
 static int same_side_pairs(const xing *x, const int *mate, int k)
 {
@@ -1353,9 +1343,10 @@ static int through_corners(walker *w, const rect *q, const xing *a,
     return w->emit(w->user, from, b->p);
 }
 
-/* Whether the paths of pairing `mate` of leaf q's k crossings x, the pair
- * on one side (at most one) turning at d, meet nowhere (exact). */
-static int paths_apart(const xing *x, int k, const int *mate, wm_pt d)
+/* Whether the paths of pairing `mate` of leaf q's k crossings x meet
+ * nowhere (exact); the pair of out crossing i, when on one side, turns at
+ * d[i]. */
+static int paths_apart(const xing *x, int k, const int *mate, const wm_pt *d)
 {
     wm_pt seg[2 * WM_LEAF_ARCS * 2][2];
     int path[2 * WM_LEAF_ARCS * 2], n = 0;
@@ -1365,8 +1356,8 @@ static int paths_apart(const xing *x, int k, const int *mate, wm_pt d)
             const wm_pt a = x[i].p, b = x[mate[i]].p;
             if (x[i].side == x[mate[i]].side)
             {
-                seg[n][0] = a, seg[n][1] = d, path[n++] = i;
-                seg[n][0] = d, seg[n][1] = b, path[n++] = i;
+                seg[n][0] = a, seg[n][1] = d[i], path[n++] = i;
+                seg[n][0] = d[i], seg[n][1] = b, path[n++] = i;
             }
             else
                 seg[n][0] = a, seg[n][1] = b, path[n++] = i;
@@ -1379,35 +1370,54 @@ static int paths_apart(const xing *x, int k, const int *mate, wm_pt d)
     return 1;
 }
 
-/* Emits pairing `mate` of leaf q's k crossings x (at most one pair on one
- * side). The pair on one side turns one unit inside the side, at the first
- * of three places where no two paths then meet: across from its middle,
- * from its out crossing, from its other crossing (a path nesting it may
- * leave the side at a slant, passing under the middle's turn: crossings a
- * unit apart, mosaic seed 141419 at 2.5 m). Returns 1, 0 when out of
- * memory, -1 when no place does. */
+/* Where the pair a -> b on one side of q may turn, choice t of three: one
+ * unit inside the side across from its middle, from a, from b. */
+static wm_pt turn_of(const rect *q, const xing *a, const xing *b, int t)
+{
+    return t == 0   ? detour(q, a, b)
+           : t == 1 ? detour(q, a, a)
+                    : detour(q, b, b);
+}
+
+/* Emits pairing `mate` of leaf q's k crossings x, of which at most two
+ * pairs lie on one side (a land wedge entering the leaf from its bottom
+ * and one from its top, their water joined between the tips: cluster
+ * seed 154495 at 2 m). Such a pair turns one unit inside its side, at
+ * the first of three places (across from its middle, from its out
+ * crossing, from its other crossing), the pairs' places tried together,
+ * where no two paths then meet (a path nesting it may leave the side at a
+ * slant, passing under the middle's turn: crossings a unit apart, mosaic
+ * seed 141419 at 2.5 m). Returns 1, 0 when out of memory, -1 when no
+ * places do. */
 static int draw_pairs(walker *w, const rect *q, const xing *x, int k,
                       const int *mate)
 {
-    int s = -1; /* the out crossing of the pair on one side */
-    for (int i = 0; i < k && s < 0; i++)
+    int s[2], m = 0; /* the out crossings of the pairs on one side */
+    for (int i = 0; i < k; i++)
         if (x[i].out && x[i].side == x[mate[i]].side)
-            s = i;
-    if (s < 0)
-        return paths_apart(x, k, mate, (wm_pt){0, 0})
-                   ? pair_mates(w, q, x, k, mate)
-                   : -1;
-    const xing *a = &x[s], *b = &x[mate[s]];
-    const wm_pt turn[3] = {detour(q, a, b), detour(q, a, a), detour(q, b, b)};
-    for (int t = 0; t < 3; t++)
+        {
+            if (m == 2)
+                return -1;
+            s[m++] = i;
+        }
+    wm_pt d[2 * WM_LEAF_ARCS];
+    const int tries = m == 0 ? 1 : m == 1 ? 3 : 9;
+    for (int t = 0; t < tries; t++)
     {
-        if (!paths_apart(x, k, mate, turn[t]))
+        for (int j = 0, u = t; j < m; j++, u /= 3)
+            d[s[j]] = turn_of(q, &x[s[j]], &x[mate[s[j]]], u % 3);
+        if (!paths_apart(x, k, mate, d))
             continue;
         for (int i = 0; i < k; i++)
-            if (x[i].out && !(i == s ? w->emit(w->user, a->p, turn[t]) &&
-                                           w->emit(w->user, turn[t], b->p)
-                                     : w->emit(w->user, x[i].p, x[mate[i]].p)))
+        {
+            if (!x[i].out)
+                continue;
+            const wm_pt a = x[i].p, b = x[mate[i]].p;
+            if (x[i].side != x[mate[i]].side
+                    ? !w->emit(w->user, a, b)
+                    : !w->emit(w->user, a, d[i]) || !w->emit(w->user, d[i], b))
                 return 0;
+        }
         return 1;
     }
     return -1;
@@ -1417,8 +1427,8 @@ static int draw_pairs(walker *w, const rect *q, const xing *x, int k,
  * it (wm_leaf_join): each arc's last crossing with the first of the next
  * arc of its component, counter-clockwise. Returns 1 when done, 0 when
  * out of memory, -1 when the inputs there are beyond that reading, or
- * their pairing is one the paths cannot draw (crossing pairs, two pairs
- * on one side each, or paths that would meet: draw_pairs()). */
+ * their pairing is one the paths cannot draw (crossing pairs, more than
+ * two pairs on one side each, or paths that would meet: draw_pairs()). */
 static int pair_exact(walker *w, const rect *q, const xing *x, int k)
 {
     if (k > 2 * WM_LEAF_ARCS)
@@ -1451,8 +1461,6 @@ static int pair_exact(walker *w, const rect *q, const xing *x, int k)
         mate[out] = from[b];
         mate[from[b]] = out;
     }
-    if (same_side_pairs(x, mate, k) > 1)
-        return -1;
     return draw_pairs(w, q, x, k, mate);
 }
 
