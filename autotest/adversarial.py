@@ -102,6 +102,7 @@ import scenes
 PIXEL_SIZE = 0.5
 BLOCK_SIZE = 64.0
 LATTICE_Q = 256  # WM_Q: lattice points per pixel
+THIN_UNITS = 0.5  # block.c's WM_THIN: rings thinner (2 area / perimeter, units) are rounding
 EPSG = scenes.SCENE_EPSG  # 32631
 # a corner of the global block grid near scenes.SCENE_ORIGIN
 # (400000 / 64 = 6250, 4699968 / 64 = 73437)
@@ -921,7 +922,13 @@ def resolvable(oracle_by_block, px, block_size):
     filled, a part dropped. Mosaic seed 131073 has one: a land triangle 1.7
     x 0.7 units where two banks and a lake piece nearly close. A long sliver
     thinner than a unit (a bank crossing a lake edge at a tiny angle) is
-    kept, and so must the output keep it. So are the rings touching a block
+    kept, and so must the output keep it, unless it is thinner than half a
+    unit on average (2 x area / perimeter below WM_THIN, block.c's bound for
+    a ring that is a remnant of rounding: a sliver no more than a unit
+    thick where thickest): the strip between two rivers whose densified
+    vertices lie on the lattice, half a unit off their lines, pinched into
+    rows of such slivers 0.2-0.4 units thick (parallel seed 159087 at 0.5 m
+    with `--densify 0.1`). So are the rings touching a block
     side and thinner (2 x area / perimeter) than the rounding of the inputs
     (WM_COINCIDE, 1e-6 units, or GEOS's few ulps of UTM coordinates, 1e-8
     m): a bank or lake edge on a block line but for rounding, whose samples
@@ -933,7 +940,10 @@ def resolvable(oracle_by_block, px, block_size):
 
     def ok(ring):
         x0, y0, x1, y1 = ring.bounds
-        return max(x1 - x0, y1 - y0) >= small
+        if max(x1 - x0, y1 - y0) < small:
+            return False
+        poly = Polygon(ring)
+        return 2.0 * poly.area >= THIN_UNITS * unit * poly.length
 
     def thin_on_side(ring, b):
         poly = Polygon(ring)

@@ -434,3 +434,40 @@ def test_osm_block(wm, case):
     assert fig['hausdorff_px'] <= HAUSDORFF_PX, (case, fig['hausdorff_px'], fig['worst_at'])
     assert fig['specks_outer'] == 0 and fig['specks_hole'] == 0, (case, fig['speck_at'])
     assert fig['lost_outer'] == 0 and fig['lost_hole'] == 0, (case, fig['lost_at'])
+
+
+def test_densified_arcs_keep_their_strip(wm, tmp_path):
+    """Two concentric river arcs (radius about 20 m) with a vertex every
+    0.1 pixel, on the lattice as adversarial.py snaps them, and a land strip
+    4 lattice units wide between their banks. Over 8 vertices per pixel the
+    rivers are thinned as they are read; the least tolerance that leaves 8
+    per pixel (1 unit here) keeps the strip, where 1/16 pixel (16 units,
+    the sagitta of chords 4.5 px long) closed it in places: one water
+    polygon instead of two (wm_ingest.c's thin_dense)."""
+    import math
+    from osgeo import ogr
+    import scenes
+    px, B = PIXEL_SIZE, BLOCK_SIZE
+    unit = px / adversarial.LATTICE_Q
+    cx, cy = adversarial.ORIGIN[0] + 4.0, adversarial.ORIGIN[1] + 4.0
+    w1, w2, gap = 2.0, 1.5, 4 * unit
+    r1 = 40.0
+    r2 = r1 + w1 / 2 + gap + w2 / 2
+    rivers = []
+    for r, w in ((r1, w1), (r2, w2)):
+        n = int(r * math.pi / 2 / (0.1 * px))
+        pts = [(cx + r * math.cos(0.15 + 1.2 * k / n), cy + r * math.sin(0.15 + 1.2 * k / n))
+               for k in range(n + 1)]
+        pts = adversarial._dedup([adversarial._snap(p, unit) for p in pts])
+        rivers.append({'geom': 'LINESTRING (%s)' % adversarial._coords(pts), 'width': w})
+    path = str(tmp_path / 'arcs.gpkg')
+    scenes.write_layer(path, 'rivers', ogr.wkbLineString, adversarial.EPSG, rivers,
+                       fields=[('width', 'Real')])
+    options = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'WIDTH_FIELD': 'width',
+               'PIXEL_SIZE': px, 'BLOCK_SIZE': B, 'SIMPLIFY': 0, 'NUM_THREADS': 1}
+    orc = oracle.oracle_blocks(oracle.inputs_from_options(options), B)
+    res = wm.run(options)
+    fig, _ = adversarial.measure(res.water, orc, B, px)
+    assert fig['ring_diff'] == 0, fig
+    assert fig['hausdorff_px'] <= HAUSDORFF_PX, (fig['hausdorff_px'], fig['worst_at'])
+    assert sum(len(oracle.polygons_of(g)) for g in orc.values()) == len(res.water)
