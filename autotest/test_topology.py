@@ -389,7 +389,13 @@ RING_SCENES = ['twins-135011@1:128', 'twins-135410@1:128', 'mosaic-135325',
                # another lake's edge): two pairs on one side, drawn by the
                # fallback as separated (a land channel a unit wide, the small
                # lake a speck) until draw_pairs() took two such pairs
-               'cluster-59', 'cluster-156368@0.25:32']
+               'cluster-59', 'cluster-156368@0.25:32',
+               # a river with 17 vertices per pixel thinned to 1/16 px as it
+               # was read, its bank then a unit off two lake edges that the
+               # line as drawn meets at one point: a land speck 2 x 2 units
+               # (subpixel seed 152200 at 30 m); now thinned to the least
+               # tolerance that leaves 8 per pixel (wm_ingest.c)
+               'subpixel-152200@30:3840']
 
 
 @pytest.mark.parametrize('scene', SCENE_IDS + RING_SCENES, indirect=True)
