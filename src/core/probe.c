@@ -631,8 +631,15 @@ static int round_crossings(const double *iv, size_t niv, int32_t L, int cls0,
             const int after = (nb == 2 && k == 1) || (nb == 1 && b[0] == lo);
             /* water is closed: a boundary through an end sample is a
              * crossing only when the water is on the other side of it,
-             * then next to the sample, where interpolation puts it */
-            if (!(after ? b[k] > 0 && b[k] <= L : b[k] >= 0 && b[k] < L))
+             * then next to the sample, where interpolation puts it; so is
+             * one through an end given as land that the water beyond it
+             * meets (field.c settles such a sample of a block line to
+             * land: a lake crossing the side there, seam seed 161017 at
+             * 3 m, lost its half in one block) */
+            const int at0 = b[k] == 0 && after && cur == 0;
+            const int atL = b[k] == L && !after && *cls1 == 0;
+            if (!(after ? b[k] > 0 && b[k] <= L : b[k] >= 0 && b[k] < L) &&
+                !at0 && !atL)
             {
                 if (after != cur)
                     at_end = b[k] == 0 ? 1 : 2;
