@@ -607,7 +607,6 @@ static int round_crossings(const double *iv, size_t niv, int32_t L, int cls0,
      * classes: a boundary that does not change the class (rounding at an
      * end) is skipped, two on one lattice point cancel */
     int n = 0, cur = cls0;
-    int at_end = 0; /* a boundary through the start (1) or end (2) left */
     double reach = -INFINITY; /* right end of the union so far */
     double last = 0;          /* unrounded position of off[n - 1] */
     for (size_t i = 0; i <= niv; i++)
@@ -640,11 +639,7 @@ static int round_crossings(const double *iv, size_t niv, int32_t L, int cls0,
             const int atL = b[k] == L && !after && *cls1 == 0;
             if (!(after ? b[k] > 0 && b[k] <= L : b[k] >= 0 && b[k] < L) &&
                 !at0 && !atL)
-            {
-                if (after != cur)
-                    at_end = b[k] == 0 ? 1 : 2;
                 continue;
-            }
             if (after == cur)
                 continue;
             /* rounded, kept off the ends */
@@ -681,10 +676,10 @@ static int round_crossings(const double *iv, size_t niv, int32_t L, int cls0,
     {
         if (n > 0)
             n--;
-        else if (L >= 2 && max > 0) /* next to the end the boundary meets
-                                       (an end given as land that the
-                                       water meets, field.c's block lines) */
-            off[n++] = at_end == 1 ? 1 : (at_end == 2 ? L - 1 : L / 2);
+        else if (L >= 2 && max > 0) /* the ends' given classes differ
+                                       where the inputs find no boundary
+                                       between them: one midway */
+            off[n++] = L / 2;
     }
     return n;
 }
