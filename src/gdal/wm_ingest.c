@@ -375,9 +375,11 @@ static int read_points(builder *b, OGRGeometryH g, const feat_ctx *fc)
  * scenes 60 times slower); the union of the capsules moves by at most the
  * tolerance. The least one keeps the inputs' own features: a densified
  * line (its vertices on the lattice within a unit of the line drawn)
- * thins back to that line, not 1/16 pixel off it (a land strip 2.6 units
- * wide between two densified rivers closed into a row of holes at 1/16:
- * parallel seed 159087 at 0.5 m, vertices every 0.1 pixel). A sparser run
+ * thins back to that line, not 1/16 pixel off it (two concentric arcs
+ * with a vertex every 0.08 pixel closed the 4-unit land strip between
+ * them at 1/16, test_densified_arcs_keep_their_strip; a river of 17
+ * vertices per pixel left a land speck against two lake edges: held-out
+ * subpixel seed 152200 at 30 m). A sparser run
  * is read as it is: thinning moves the river's bank against the other
  * inputs, and opened or closed land features narrower than that (a
  * meander with a vertex every 0.17 pixel, at 12 m pixels, thinned off a
