@@ -938,16 +938,16 @@ def resolvable(oracle_by_block, px, block_size):
     small = 2.0 * unit
     coincide = max(1e-6 * unit, 1e-8)
 
+    def thickness(ring):  # 2 x area / perimeter
+        poly = Polygon(ring)
+        return 2.0 * poly.area / poly.length if poly.length > 0 else 0.0
+
     def ok(ring):
         x0, y0, x1, y1 = ring.bounds
-        if max(x1 - x0, y1 - y0) < small:
-            return False
-        poly = Polygon(ring)
-        return 2.0 * poly.area >= THIN_UNITS * unit * poly.length
+        return max(x1 - x0, y1 - y0) >= small and thickness(ring) >= THIN_UNITS * unit
 
     def thin_on_side(ring, b):
-        poly = Polygon(ring)
-        if poly.length == 0 or 2.0 * poly.area >= coincide * poly.length:
+        if ring.length == 0 or thickness(ring) >= coincide:
             return False
         x0, y0 = oracle.block_origin(b, block_size)
         square = Polygon([(x0, y0), (x0 + block_size, y0),

@@ -450,13 +450,14 @@ def test_osm_block(wm, case):
 
 
 def test_densified_arcs_keep_their_strip(wm, tmp_path):
-    """Two concentric river arcs (radius about 20 m) with a vertex every
-    0.1 pixel, on the lattice as adversarial.py snaps them, and a land strip
-    4 lattice units wide between their banks. Over 8 vertices per pixel the
-    rivers are thinned as they are read; the least tolerance that leaves 8
-    per pixel (1 unit here) keeps the strip, where 1/16 pixel (16 units,
-    the sagitta of chords 4.5 px long) closed it in places: one water
-    polygon instead of two (wm_ingest.c's thin_dense)."""
+    """Two concentric river arcs (radii about 40 m) with a vertex every
+    0.08 pixel, on the lattice as adversarial.py snaps them, and a land
+    strip 4 lattice units wide between their banks. Over 8 vertices per
+    pixel the rivers are thinned as they are read; the least tolerance that
+    leaves 8 per pixel (1 unit here) keeps the strip, where 1/16 pixel (16
+    units, the sagitta of chords about 6 px long) closed it in places: one
+    water polygon instead of two (wm_ingest.c's thin_dense; fails on
+    8664566 with 2 rings fewer)."""
     import math
     from osgeo import ogr
     import scenes
