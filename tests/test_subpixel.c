@@ -1,6 +1,7 @@
 /* test_subpixel.c - features narrower than a pixel, found from the inputs
  * where the samples cannot tell (probe.c, subpixel.c, contour.c). */
 #include "contour.h"
+#include "corners.h"
 #include "field.h"
 #include "probe.h"
 #include "ring_check.h"
@@ -110,6 +111,54 @@ static void bank_on_side(void)
     su_lake(&s, lake, &four, 1);
     su_finish(&s);
     side_gap(&s, 1, WM_Q - 1, "land between the lake and D on the side");
+}
+
+/* A river 5 px wide drawn along an arc of radius 40 px with a vertex
+ * every quarter pixel: the union's corners are the inner bends' (one per
+ * vertex), and the candidates include where each bank's side meets the
+ * outer round join (a tangent). The offset lines of segments a few apart cross
+ * too, and an end circle crosses the next segment's sides, all inside the
+ * capsules: not corners (4.6 M of them made a real river network drawn that
+ * densely 170 times slower). */
+static void dense_bend(void)
+{
+    wm_scene s;
+    su_init(&s, 128);
+    enum
+    {
+        NV = 201
+    };
+    static double xy[2 * NV];
+    for (int i = 0; i < NV; i++)
+    {
+        const double t = 0.25 * i / 40.0; /* a quarter pixel of arc */
+        xy[2 * i] = 64 + 40 * cos(t);
+        xy[2 * i + 1] = 20 + 40 * sin(t);
+    }
+    su_river(&s, xy, NV, 2.5);
+    su_finish(&s);
+    wm_field f;
+    wm_probe p;
+    TAP_EQ(wm_field_compute(&s, 0, 0, s.n + 1, s.n + 1, NULL, &f, NULL), WM_OK,
+           "field");
+    TAP_EQ(wm_probe_init(&p, &s, 0, 0), WM_OK, "probe");
+    TAP_EQ(wm_corners_find(&p, &f, NULL), WM_OK, "corners");
+    size_t apart = 0; /* corners of segments sharing no end */
+    for (size_t i = 0; i < p.ncorner; i++)
+        apart += !p.corner_joint[i];
+    TAP_EQ(apart, 0, "no crossing of segments apart is a corner");
+    TAP_OK(p.ncorner <= 3 * NV,
+           "about a corner per bend on each bank: %zu for %d vertices (5681 "
+           "before)",
+           p.ncorner, NV);
+    wm_probe_free(&p);
+    wm_field_free(&f);
+    wm_rings r = {0};
+    TAP_EQ(extract(&s, 1, &r), WM_OK, "extract with the exact search");
+    TAP_EQ(r.nrings, 1, "one ring");
+    TAP_EQ(ring_meetings(&r), 0, "rings simple and disjoint");
+    wm_rings_free(&r);
+    wm_scene_free(&s);
 }
 
 int main(void)
@@ -411,5 +460,6 @@ int main(void)
     wm_scene_free(&s);
     block_side();
     bank_on_side();
+    dense_bend();
     return TAP_DONE();
 }

@@ -19,7 +19,9 @@ extern "C"
      * and end circles, lake edges) in the block square, whose nearest
      * sample of f is within 0.75 pixel of the boundary, snapped to the
      * lattice (and, within a unit of the block square, one unit inside
-     * it), sorted and distinct. Some are buried under a third input.
+     * it), sorted and distinct; of two river segments sharing no end and
+     * shorter than they are wide, none strictly inside a river capsule.
+     * Some are buried under a third input.
      */
     wm_status wm_corners_find(wm_probe *probe, const wm_field *f,
                               const wm_ctx *ctx);
