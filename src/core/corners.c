@@ -377,7 +377,8 @@ static int short_seg(const wm_probe *in, const prim *p)
     if (p->seg == NO_ITEM)
         return 0;
     const wm_river_seg *g = &in->s->segs[in->segs[p->seg]];
-    return hypot((double)(g->bx - g->ax), (double)(g->by - g->ay)) < 2 * g->r;
+    const double dx = (double)(g->bx - g->ax), dy = (double)(g->by - g->ay);
+    return dx * dx + dy * dy < 4 * g->r * g->r;
 }
 
 /* Segments between two crossing ones (by id) that under_capsule() tries
@@ -430,12 +431,12 @@ static int pair_hits(finder *cf, uint32_t i, uint32_t j, int64_t cx, int64_t cy)
     if (cx != (ci[0] > cj[0] ? ci[0] : cj[0]) ||
         cy != (ci[1] > cj[1] ? ci[1] : cj[1]))
         return 1;
-    /* with a circle, boxes apart by more than any rounding give no hit; two
-     * nearly parallel lines may (their crossing is noise, far off), and
-     * are kept as they were */
+    /* boxes apart by more than any rounding give no hit (two nearly
+     * collinear lines apart may give one, noise: an offset line of a
+     * straight river drawn densely and the next but one's) */
     const double *bp = cf->pb + 4 * i, *bq = cf->pb + 4 * j;
-    if ((p->circle || q->circle) && (bp[0] > bq[2] + 4 || bq[0] > bp[2] + 4 ||
-                                     bp[1] > bq[3] + 4 || bq[1] > bp[3] + 4))
+    if (bp[0] > bq[2] + 4 || bq[0] > bp[2] + 4 || bp[1] > bq[3] + 4 ||
+        bq[1] > bp[3] + 4)
         return 1;
     dpt hit[2];
     const int nh = intersect(p, q, hit);
