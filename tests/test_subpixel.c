@@ -11,6 +11,7 @@
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Rings of block (0, 0) of scene s (n x n cells): without (probe == 0) or
  * with the exact search. */
@@ -159,6 +160,108 @@ static void dense_bend(void)
     TAP_EQ(ring_meetings(&r), 0, "rings simple and disjoint");
     wm_rings_free(&r);
     wm_scene_free(&s);
+}
+
+/* The corners wm_corners_find gives for block (0, 0) of s, into *c (the
+ * caller frees); how many. */
+static size_t corners_of(const wm_scene *s, wm_pt **c)
+{
+    wm_field f;
+    wm_probe p;
+    *c = NULL;
+    if (wm_field_compute(s, 0, 0, s->n + 1, s->n + 1, NULL, &f, NULL) != WM_OK)
+        return 0;
+    size_t n = 0;
+    if (wm_probe_init(&p, s, 0, 0) == WM_OK &&
+        wm_corners_find(&p, &f, NULL) == WM_OK)
+    {
+        n = p.ncorner;
+        *c = malloc((n + 1) * sizeof **c);
+        if (*c)
+            memcpy(*c, p.corner, n * sizeof **c);
+    }
+    wm_probe_free(&p);
+    wm_field_free(&f);
+    return n;
+}
+
+/* Whether a corner of c lies within 2 units of (x, y) (pixels). */
+static int has_corner(const wm_pt *c, size_t n, double x, double y)
+{
+    for (size_t i = 0; i < n; i++)
+        if (fabs(c[i].x - x * WM_Q) <= 2 && fabs(c[i].y - y * WM_Q) <= 2)
+            return 1;
+    return 0;
+}
+
+/* Two rivers 4 px wide drawn with a vertex every quarter pixel cross at
+ * (60.1, 60.1); a third, 10 px wide, covers their banks' crossing
+ * (62.1, 62.1) 0.7 px deep (within the field's 0.75 px of the boundary),
+ * away from their vertices (where each bank touches its own end circles,
+ * joint crossings, which stay). That crossing
+ * is no corner of the union; the capsule burying it is found through the
+ * probe's index (the two segments' ids are 320 apart). Read in either
+ * order, a line of short segments and one long segment meeting end to end
+ * give the same corners (their shared end circle is short only where both
+ * are). */
+static void buried_crossings(void)
+{
+    enum
+    {
+        NL = 321
+    };
+    static double h[2 * NL], v[2 * NL];
+    for (int i = 0; i < NL; i++)
+    {
+        h[2 * i] = v[2 * i + 1] = 20 + 0.25 * i;
+        h[2 * i + 1] = v[2 * i] = 60.1;
+    }
+    const double w[] = {55, 66.4, 70, 66.4};
+    wm_scene s;
+    su_init(&s, 128);
+    su_river(&s, h, NL, 2.0);
+    su_river(&s, v, NL, 2.0);
+    su_river(&s, w, 2, 5.0);
+    su_finish(&s);
+    wm_pt *c;
+    size_t n = corners_of(&s, &c);
+    TAP_OK(has_corner(c, n, 58.1, 58.1),
+           "the banks' crossing (58.1, 58.1) a corner");
+    TAP_OK(!has_corner(c, n, 62.1, 62.1),
+           "the banks' crossing (62.1, 62.1) under the third river is none");
+    free(c);
+    wm_scene_free(&s);
+
+    /* a dense arc ending where a long segment starts, read both ways */
+    enum
+    {
+        NA = 81
+    };
+    static double arc[2 * NA];
+    for (int i = 0; i < NA; i++)
+    {
+        const double t = 0.25 * i / 30.0;
+        arc[2 * i] = 40 + 30 * cos(t);
+        arc[2 * i + 1] = 20 + 30 * sin(t);
+    }
+    const double tail[] = {arc[2 * NA - 2], arc[2 * NA - 1], 20, 90};
+    wm_pt *c2;
+    su_init(&s, 128);
+    su_river(&s, arc, NA, 2.5);
+    su_river(&s, tail, 2, 2.5);
+    su_finish(&s);
+    n = corners_of(&s, &c);
+    wm_scene_free(&s);
+    su_init(&s, 128);
+    su_river(&s, tail, 2, 2.5);
+    su_river(&s, arc, NA, 2.5);
+    su_finish(&s);
+    const size_t n2 = corners_of(&s, &c2);
+    wm_scene_free(&s);
+    TAP_OK(n > 0 && n == n2 && c && c2 && !memcmp(c, c2, n * sizeof *c),
+           "the same corners in either order (%zu, %zu)", n, n2);
+    free(c);
+    free(c2);
 }
 
 int main(void)
@@ -461,5 +564,6 @@ int main(void)
     block_side();
     bank_on_side();
     dense_bend();
+    buried_crossings();
     return TAP_DONE();
 }

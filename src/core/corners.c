@@ -6,9 +6,10 @@
  * offset lines and two end circles (a circle two consecutive segments
  * share taken once), for a lake edge the edge. Their pairwise
  * intersections (primitives bucketed in a grid of 16-pixel cells; pairs
- * from the same input item, or with a circle and boxes apart, skipped) are
- * kept when in the block square (on it or within a unit of it: one unit
- * inside it) and near the boundary (the nearest
+ * from the same input item, or with boxes apart, skipped) are kept when in
+ * the block square (on it or within a unit of it: one unit inside it), not
+ * strictly inside a river capsule where two short segments cross
+ * (under_capsule()), and near the boundary (the nearest
  * sample within 0.75 pixel of it: the field is 1-Lipschitz, so a point of
  * the boundary is within 0.71 pixel of a sample valued within 0.71 pixel
  * of 0; anything else is buried under another input).
@@ -367,18 +368,28 @@ static int inside_capsule(const wm_probe *in, const wm_river_seg *g, dpt h)
     return fx * fx + fy * fy < r * r;
 }
 
-/* Whether p is a river primitive whose segment is shorter than its
- * capsule is wide: where buried crossings multiply. Elsewhere they are
- * few, and one that seeds a crowded cell (subpixel.c) has it rebuilt
- * exactly (testing every crossing changed 66 of L3's 1,430 features and
- * made three held-out island scenes at 2 m slightly less exact). */
+/* Whether river segment slot k of the block is shorter than its capsule
+ * is wide. */
+static int short_slot(const wm_probe *in, uint32_t k)
+{
+    const wm_river_seg *g = &in->s->segs[in->segs[k]];
+    const double dx = (double)(g->bx - g->ax), dy = (double)(g->by - g->ay);
+    return dx * dx + dy * dy < 4 * g->r * g->r;
+}
+
+/* Whether p is a river primitive of segments shorter than they are wide
+ * (a circle two consecutive slots share: both of them, as its two copies
+ * would be, read in another order): where buried crossings multiply.
+ * Elsewhere they are few, and one that seeds a crowded cell (subpixel.c)
+ * has it rebuilt exactly (testing every crossing changed 66 of L3's 1,430
+ * features and made three held-out island scenes at 2 m slightly less
+ * exact). */
 static int short_seg(const wm_probe *in, const prim *p)
 {
     if (p->seg == NO_ITEM)
         return 0;
-    const wm_river_seg *g = &in->s->segs[in->segs[p->seg]];
-    const double dx = (double)(g->bx - g->ax), dy = (double)(g->by - g->ay);
-    return dx * dx + dy * dy < 4 * g->r * g->r;
+    return short_slot(in, p->seg) &&
+           (p->item != NO_ITEM || short_slot(in, p->seg + 1));
 }
 
 /* Segments between two crossing ones (by id) that under_capsule() tries
