@@ -464,14 +464,14 @@ static int pair_hits(finder *cf, uint32_t i, uint32_t j, int64_t cx, int64_t cy)
         if (!(hit[h].x >= 0 && hit[h].x <= cf->S && hit[h].y >= 0 &&
               hit[h].y <= cf->S))
             continue; /* in the block */
-        /* one on the block square or within a unit of it is kept one unit
-         * inside it (a wedge's tip 0.4 unit off the square is a corner of
-         * this block alone; a lake's corner on a block corner is where the
-         * block lines' land samples put it, field.c) */
         const int jt = joint(cf->in, p, q);
         if (!jt && short_seg(cf->in, p) && short_seg(cf->in, q) &&
             under_capsule(cf->in, p, q, hit[h]))
             continue;
+        /* one on the block square or within a unit of it is kept one unit
+         * inside it (a wedge's tip 0.4 unit off the square is a corner of
+         * this block alone; a lake's corner on a block corner is where the
+         * block lines' land samples put it, field.c) */
         const double lo = 1, hi = cf->S - 1;
         const hit_pt c = {{round_pos(fmin(fmax(hit[h].x, lo), hi)),
                            round_pos(fmin(fmax(hit[h].y, lo), hi))},
