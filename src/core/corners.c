@@ -352,20 +352,17 @@ static int shared_cell(const finder *cf, uint32_t i, uint32_t j, int64_t cx,
            cx <= b[2] && cy >= b[1] && cy <= b[3];
 }
 
-/* Whether point h (block-local) lies strictly inside river capsule g. */
+/* Whether point h (block-local) lies strictly inside river capsule g
+ * (its box first: most capsules of a cell are far). */
 static int inside_capsule(const wm_probe *in, const wm_river_seg *g, dpt h)
 {
     const double r = g->r - WM_COINCIDE;
-    const double dx = (double)(g->bx - g->ax), dy = (double)(g->by - g->ay);
     const double ex = h.x - (double)(g->ax - in->X0),
                  ey = h.y - (double)(g->ay - in->Y0);
-    if (r <= 0 || fabs(ex) > r + fabs(dx) || fabs(ey) > r + fabs(dy))
+    if (r <= 0 || fabs(ex) > r + fabs((double)(g->bx - g->ax)) ||
+        fabs(ey) > r + fabs((double)(g->by - g->ay)))
         return 0;
-    const double l2 = dx * dx + dy * dy;
-    double t = l2 > 0 ? (ex * dx + ey * dy) / l2 : 0;
-    t = t < 0 ? 0 : t > 1 ? 1 : t;
-    const double fx = ex - t * dx, fy = ey - t * dy;
-    return fx * fx + fy * fy < r * r;
+    return wm_probe_seg_dist(in, g->ax, g->ay, g->bx, g->by, h.x, h.y) < r;
 }
 
 /* Whether river segment slot k of the block is shorter than its capsule

@@ -172,10 +172,8 @@ static wm_status build_lake_index(wm_probe *in, int32_t S)
     return wm_cells_index(&in->lrows);
 }
 
-/* Distance from (x, y) (block-local, double) to segment (global ends);
- * differences of coordinates are formed before any rounding. */
-static double seg_dist(const wm_probe *in, int64_t ax, int64_t ay, int64_t bx,
-                       int64_t by, double x, double y)
+double wm_probe_seg_dist(const wm_probe *in, int64_t ax, int64_t ay, int64_t bx,
+                         int64_t by, double x, double y)
 {
     const double px = x - (double)(ax - in->X0), py = y - (double)(ay - in->Y0);
     const double dx = (double)(bx - ax), dy = (double)(by - ay);
@@ -256,7 +254,8 @@ double wm_probe_distance(wm_probe *in, double x, double y, double reach)
             gy < (double)(g->ay < g->by ? g->ay : g->by) - m ||
             gy > (double)(g->ay > g->by ? g->ay : g->by) + m)
             continue;
-        const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y) - g->r;
+        const double v =
+            wm_probe_seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y) - g->r;
         d = v < d ? v : d;
     }
     if (in->nledge == 0)
@@ -275,7 +274,8 @@ double wm_probe_distance(wm_probe *in, double x, double y, double reach)
             gy > (double)(g->ay > g->by ? g->ay : g->by) + reach)
             continue;
         touch(in, le->k, &nt, reach);
-        const double v = seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y);
+        const double v =
+            wm_probe_seg_dist(in, g->ax, g->ay, g->bx, g->by, x, y);
         in->dmin[le->k] = v < in->dmin[le->k] ? v : in->dmin[le->k];
     }
     for (size_t i = 0; i < nt; i++)

@@ -113,6 +113,12 @@ extern "C"
      */
     double wm_probe_distance(wm_probe *p, double x, double y, double reach);
 
+    /** Distance (lattice units) from the block-local point (x, y) to the
+     *  segment with global lattice ends a, b; the differences of
+     *  coordinates are formed before any rounding. */
+    double wm_probe_seg_dist(const wm_probe *p, int64_t ax, int64_t ay,
+                             int64_t bx, int64_t by, double x, double y);
+
     /**
      * The crossings of the union's boundary with the open axis-aligned
      * lattice segment from block-local P, of length L > 0 lattice units,
