@@ -765,6 +765,50 @@ int main(void)
                "cancelled: status %d, %zu rings", (int)st, out.nrings);
     }
 
+    /* the side guard: a shore 60 units from the side x = 0 over 2000
+     * units, then closing on it; straightened within the tolerance (100)
+     * it would run at 22 units from the side, inside the diametral circles
+     * of the 64-unit pieces refinement cuts the side into (radius 32),
+     * which it may not split; guarded, the vertex that keeps it out stays,
+     * and the collinear one still goes */
+    {
+        wm_rings_clear(&in);
+        const int shore[][2] = {
+            {0, 1000}, {60, 1000}, {60, 3000}, {30, 4000}, {0, 5000}};
+        for (size_t i = 0; i < sizeof shore / sizeof shore[0]; i++)
+            push(&in, shore[i][0], shore[i][1]);
+        close_ring(&in);
+        wm_side_piece pc[63];
+        for (int k = 0; k < 63; k++)
+            pc[k] = (wm_side_piece){
+                {0, 1000 + 64 * k},
+                {0, 1000 + 64 * (k + 1) < 5000 ? 1000 + 64 * (k + 1) : 5000}};
+        const int32_t S = 65536;
+        wm_rings_clear(&out);
+        wm_rings_clear(&out2);
+        const wm_status s0 = wm_simplify_rings(&in, S, 100, &out, NULL);
+        const wm_status s1 =
+            wm_simplify_rings_guarded(&in, S, 100, pc, 63, &out2, NULL);
+        int kept = 0, collinear = 0;
+        for (size_t k = 0; k < out2.npts; k++)
+        {
+            kept |= out2.pts[k].x == 60 && out2.pts[k].y == 3000;
+            collinear |= out2.pts[k].x == 30;
+        }
+        TAP_OK(s0 == WM_OK && wm_rings_len(&out, 0) == 3,
+               "side guard: unguarded, the shore straightened (%zu vertices)",
+               wm_rings_len(&out, 0));
+        TAP_OK(s1 == WM_OK && kept && !collinear && wm_rings_len(&out2, 0) == 4,
+               "side guard: the vertex keeping the shore off the pieces "
+               "stays (%zu vertices)",
+               wm_rings_len(&out2, 0));
+        /* no piece there: the same as unguarded */
+        wm_rings_clear(&out2);
+        wm_simplify_rings_guarded(&in, S, 100, pc, 4, &out2, NULL);
+        TAP_EQ(wm_rings_len(&out2, 0), 3,
+               "side guard: pieces far from the shore change nothing");
+    }
+
     wm_rings_free(&in);
     wm_rings_free(&out);
     wm_rings_free(&out2);

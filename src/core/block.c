@@ -261,6 +261,50 @@ static void side_items_free(side_items *si)
     wm_lake_bands_free(&si->lakes);
 }
 
+/* The refinement options of block (bx, by) (refine.h): what triangulate
+ * refines by, and what simplify guards. */
+static wm_refine_opts refine_opts(const wm_scene *s, int64_t bx, int64_t by,
+                                  const wm_block_opts *opts, side_items *si,
+                                  const wm_side_ends *ends)
+{
+    const int64_t S = (int64_t)s->n * WM_Q;
+    const wm_refine_opts ro = {
+        opts->min_angle, opts->max_edge, (int32_t)S, bx * S,
+        by * S,          side_room,      si,         ends,
+        opts->simplify};
+    return ro;
+}
+
+/* Simplifies raw into simp (simplify.h). With MIN_ANGLE the shore is kept
+ * out of the diametral circles of the pieces that refinement will cut the
+ * block square's edges into and may not split
+ * (wm_simplify_rings_guarded). */
+static wm_status simplify(const wm_rings *raw, const wm_scene *s, int64_t bx,
+                          int64_t by, const wm_block_opts *opts, wm_rings *simp,
+                          const wm_ctx *ctx)
+{
+    const int32_t S = s->n * WM_Q;
+    if (!opts->triangulate || !(opts->min_angle > 0) || !(opts->simplify > 0))
+        return wm_simplify_rings(raw, S, opts->simplify, simp, ctx);
+    side_items si;
+    wm_side_ends ends;
+    wm_side_piece *pc = NULL;
+    size_t n = 0;
+    memset(&ends, 0, sizeof ends);
+    wm_status st = side_items_init(&si, s, bx, by);
+    const wm_refine_opts ro = refine_opts(s, bx, by, opts, &si, &ends);
+    if (st != WM_OK || !wm_side_ends_build(&ends, raw, S) ||
+        !wm_side_pieces(raw, &ro, &pc, &n))
+        st = wm_fail(ctx, WM_ERR_NOMEM, "out of memory simplifying");
+    else
+        st =
+            wm_simplify_rings_guarded(raw, S, opts->simplify, pc, n, simp, ctx);
+    free(pc);
+    side_items_free(&si);
+    wm_side_ends_free(&ends);
+    return st;
+}
+
 /* The constrained Delaunay triangulation of every polygon, refined to
  * MIN_ANGLE and MAX_EDGE when asked (refine.h). */
 static wm_status triangulate(wm_block_result *res, const wm_scene *s,
@@ -270,10 +314,8 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
     const int64_t S = (int64_t)s->n * WM_Q;
     side_items si;
     wm_side_ends ends;
-    const wm_refine_opts ro = {
-        opts->min_angle, opts->max_edge, (int32_t)S, res->bx * S,
-        res->by * S,     side_room,      &si,        &ends,
-        opts->simplify};
+    const wm_refine_opts ro =
+        refine_opts(s, res->bx, res->by, opts, &si, &ends);
     wm_refine_stats rs = {0, 0, 0};
     size_t cap = 0;
     wm_status st = WM_OK;
@@ -388,7 +430,7 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     res->seconds[WM_STAGE_EXTRACT] = t2 - t1;
     if (st != WM_OK)
         goto cleanup;
-    st = wm_simplify_rings(&raw, s->n * WM_Q, opts->simplify, &simp, ctx);
+    st = simplify(&raw, s, bx, by, opts, &simp, ctx);
     if (st == WM_OK && opts->merge > 0)
         st = wm_merge_rings(&simp, s->n * WM_Q, opts->merge, NULL, ctx);
     double t3 = wm_now();

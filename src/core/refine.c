@@ -283,8 +283,8 @@ typedef struct
  * midpoint, clear of the inputs' shore by half the room. Everything here
  * is a function of global positions and of the water along the side
  * only, so both blocks sharing the side find the same points. */
-static int grade_side(const refiner *r, int vertical, int64_t F, int64_t u,
-                      int64_t v, const side_span *e, lbuf *cut)
+static int grade_side(const wm_refine_opts *o, int vertical, int64_t F,
+                      int64_t u, int64_t v, const side_span *e, lbuf *cut)
 {
     const int64_t at0 = u == e->e0 ? e->min0 : INT64_MAX;
     const int64_t at1 = v == e->e1 ? e->min1 : INT64_MAX;
@@ -293,11 +293,11 @@ static int grade_side(const refiner *r, int vertical, int64_t F, int64_t u,
         return 1;
     const int64_t m = wm_floordiv(u + v, 2);
     const double len = (double)(v - u);
-    const double room = vertical ? r->o->room(r->o->room_user, F, m, len)
-                                 : r->o->room(r->o->room_user, m, F, len);
+    const double room = vertical ? o->room(o->room_user, F, m, len)
+                                 : o->room(o->room_user, m, F, len);
     return len <= room ||
-           (grade_side(r, vertical, F, u, m, e, cut) && lpush(cut, m) &&
-            grade_side(r, vertical, F, m, v, e, cut));
+           (grade_side(o, vertical, F, u, m, e, cut) && lpush(cut, m) &&
+            grade_side(o, vertical, F, m, v, e, cut));
 }
 
 static int cmp_u64(const void *a, const void *b)
@@ -380,6 +380,23 @@ static int64_t end_min(int64_t most, int64_t gap)
     return gap <= 0 || h >= most ? most : h > GRADE_INNER ? h : GRADE_INNER;
 }
 
+/* The shortest piece grading makes at a block corner that ends a side
+ * edge (global position C along the side at F): grade_min's `most`, or
+ * the room at the corner where that is less, down to GRADE_INNER. A shore
+ * passing the corner within `most` ends the water along the other side
+ * that near it, and a piece of `most` here, which refinement may not
+ * split, left a triangle of 5 degrees between the two (synthetic L3, seed
+ * 2). The room is global, so the four blocks at the corner agree. */
+static int64_t corner_min(const wm_refine_opts *o, int vertical, int64_t F,
+                          int64_t C, int64_t most)
+{
+    const double room = vertical ? o->room(o->room_user, F, C, (double)most)
+                                 : o->room(o->room_user, C, F, (double)most);
+    return room >= (double)most ? most
+           : room > GRADE_INNER ? (int64_t)room
+                                : GRADE_INNER;
+}
+
 /* Balances the pieces e0 < cut[0] < ... < e1 of a side edge: a piece
  * more than four times as long as a neighbour is halved at its global
  * midpoint, until none is. Ruppert's algorithm cannot split a side piece,
@@ -395,7 +412,7 @@ static int64_t end_min(int64_t most, int64_t gap)
  * the side find the same points. (A ratio of 2 cured no more triangles on the
  * synthetic L1 and L3 and added 4-6 % of them.) */
 static int balance_side(lbuf *cut, int64_t e0, int64_t e1, int64_t lo,
-                        int64_t hi, int64_t out)
+                        int64_t hi, int64_t out_lo, int64_t out_hi)
 {
     lbuf p = {NULL, 0, 0}, q = {NULL, 0, 0};
     int ok = lpush(&p, e0);
@@ -410,10 +427,10 @@ static int balance_side(lbuf *cut, int64_t e0, int64_t e1, int64_t lo,
         {
             const int64_t len = p.a[i + 1] - p.a[i];
             const int64_t l = i > 0          ? p.a[i] - p.a[i - 1]
-                              : p.a[i] == lo ? out
+                              : p.a[i] == lo ? out_lo
                                              : len;
             const int64_t rr = i + 2 < p.n        ? p.a[i + 2] - p.a[i + 1]
-                               : p.a[i + 1] == hi ? out
+                               : p.a[i + 1] == hi ? out_hi
                                                   : len;
             ok = lpush(&q, p.a[i]);
             if (ok && (len > 4 * l || len > 4 * rr))
@@ -438,28 +455,34 @@ static int balance_side(lbuf *cut, int64_t e0, int64_t e1, int64_t lo,
     return ok;
 }
 
-/* Appends to out the points cutting ring edge a -> b on the block square:
- * when it is longer than max_edge, at the global multiples of max_edge
- * along the side, and, with min_angle and a room callback, grading each
- * piece (grade_side). Both blocks sharing the side find the same exact
- * lattice points. */
-static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
+/* The global positions (along the side, ascending) cutting ring edge
+ * a -> b on the block square into cut: when it is longer than max_edge, at
+ * the global multiples of max_edge along the side, and, with min_angle and
+ * a room callback, grading each piece (grade_side). Both blocks sharing the
+ * side find the same exact lattice points. *o0 is the side's origin along
+ * it (block-local = global - *o0). */
+static int side_cut(const wm_refine_opts *o, wm_pt a, wm_pt b, lbuf *cut,
+                    int64_t *o0)
 {
-    const int64_t L = (int64_t)floor(r->o->max_edge);
+    const int64_t L = (int64_t)floor(o->max_edge);
     const int vertical = a.x == b.x;
-    const int64_t o = vertical ? r->o->Y0 : r->o->X0;
-    const int64_t F = vertical ? r->o->X0 + a.x : r->o->Y0 + a.y;
+    *o0 = vertical ? o->Y0 : o->X0;
+    const int64_t F = vertical ? o->X0 + a.x : o->Y0 + a.y;
     const int32_t pa = vertical ? a.y : a.x, pb = vertical ? b.y : b.x;
     const int32_t p0 = pa < pb ? pa : pb, p1 = pa < pb ? pb : pa;
-    const int64_t e0 = o + p0, e1 = o + p1;
-    const int grade = r->o->min_angle > 0 && r->o->room;
-    const wm_side_ends *ends = r->o->ends;
+    const int64_t e0 = *o0 + p0, e1 = *o0 + p1;
+    const int grade = o->min_angle > 0 && o->room;
+    const wm_side_ends *ends = o->ends;
     const int s = side_of(a, b);
-    const int64_t most = grade_min(r->o);
-    const side_span e = {e0, e1,
-                         end_min(most, ends ? land_gap(ends, s, p0, -1) : 0),
-                         end_min(most, ends ? land_gap(ends, s, p1, +1) : 0)};
-    lbuf cut = {NULL, 0, 0};
+    const int64_t most = grade_min(o);
+    const int64_t c0 =
+        grade && p0 == 0 ? corner_min(o, vertical, F, *o0, most) : most;
+    const int64_t c1 = grade && p1 == o->side
+                           ? corner_min(o, vertical, F, *o0 + o->side, most)
+                           : most;
+    const int64_t g0 = end_min(most, ends ? land_gap(ends, s, p0, -1) : 0);
+    const int64_t g1 = end_min(most, ends ? land_gap(ends, s, p1, +1) : 0);
+    const side_span e = {e0, e1, g0 < c0 ? g0 : c0, g1 < c1 ? g1 : c1};
     int ok = 1;
     for (int64_t u = e0; ok && u < e1;)
     {
@@ -467,21 +490,80 @@ static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
          * else the end */
         int64_t v = L >= 1 && e1 - e0 > L ? (wm_floordiv(u, L) + 1) * L : e1;
         v = v < e1 ? v : e1;
-        ok = (!grade || grade_side(r, vertical, F, u, v, &e, &cut)) &&
-             (v == e1 || lpush(&cut, v));
+        ok = (!grade || grade_side(o, vertical, F, u, v, &e, cut)) &&
+             (v == e1 || lpush(cut, v));
         u = v;
     }
-    ok = ok &&
-         (!grade || balance_side(&cut, e0, e1, o, o + r->o->side, most / 2));
+    return ok && (!grade || balance_side(cut, e0, e1, *o0, *o0 + o->side,
+                                         c0 < most / 2 ? c0 : most / 2,
+                                         c1 < most / 2 ? c1 : most / 2));
+}
+
+/* Appends to out the points cutting ring edge a -> b on the block square
+ * (side_cut), in the edge's direction. */
+static int cut_side(refiner *r, wm_pt a, wm_pt b, ibuf *out)
+{
+    lbuf cut = {NULL, 0, 0};
+    int64_t o;
+    int ok = side_cut(r->o, a, b, &cut, &o);
+    const int vertical = a.x == b.x;
+    const int fwd = vertical ? a.y < b.y : a.x < b.x;
     for (size_t i = 0; ok && i < cut.n; i++)
     {
-        const int64_t g = pa < pb ? cut.a[i] : cut.a[cut.n - 1 - i];
+        const int64_t g = fwd ? cut.a[i] : cut.a[cut.n - 1 - i];
         const wm_pt m = vertical ? (wm_pt){a.x, (int32_t)(g - o)}
                                  : (wm_pt){(int32_t)(g - o), a.y};
         int32_t im;
         ok = add_point(r, m, &im) && ibuf_push(out, im);
     }
     free(cut.a);
+    return ok;
+}
+
+int wm_side_pieces(const wm_rings *rings, const wm_refine_opts *o,
+                   wm_side_piece **out, size_t *n)
+{
+    size_t cap = 0;
+    lbuf cut = {NULL, 0, 0};
+    int ok = 1;
+    *out = NULL;
+    *n = 0;
+    for (size_t q = 0; ok && q < rings->nrings; q++)
+    {
+        const size_t b0 = rings->start[q], len = rings->start[q + 1] - b0;
+        for (size_t i = 0; ok && i < len; i++)
+        {
+            const wm_pt a = rings->pts[b0 + i],
+                        b = rings->pts[b0 + (i + 1) % len];
+            if (!on_side(o->side, a, b))
+                continue;
+            int64_t org;
+            cut.n = 0;
+            ok = side_cut(o, a, b, &cut, &org);
+            const int vertical = a.x == b.x;
+            const int32_t p0 =
+                vertical ? (a.y < b.y ? a.y : b.y) : (a.x < b.x ? a.x : b.x);
+            const int32_t p1 =
+                vertical ? (a.y < b.y ? b.y : a.y) : (a.x < b.x ? b.x : a.x);
+            int32_t u = p0;
+            for (size_t k = 0; ok && k <= cut.n; k++)
+            {
+                const int32_t v = k < cut.n ? (int32_t)(cut.a[k] - org) : p1;
+                const wm_side_piece pc = {
+                    vertical ? (wm_pt){a.x, u} : (wm_pt){u, a.y},
+                    vertical ? (wm_pt){a.x, v} : (wm_pt){v, a.y}};
+                ok = wm_push((void **)out, n, &cap, &pc, sizeof pc);
+                u = v;
+            }
+        }
+    }
+    free(cut.a);
+    if (!ok)
+    {
+        free(*out);
+        *out = NULL;
+        *n = 0;
+    }
     return ok;
 }
 

@@ -5,6 +5,7 @@
 #ifndef WM_REFINE_H
 #define WM_REFINE_H
 
+#include "simplify.h"
 #include "wm_core.h"
 
 #ifdef __cplusplus
@@ -63,6 +64,16 @@ extern "C"
     } wm_refine_stats;
 
     /**
+     * The pieces every ring edge of `rings` on the block square is cut into
+     * by the rule wm_refine_triangulate applies (below), with the same o.
+     * They are what refinement may not split; simplification keeps the
+     * shore out of their diametral circles (wm_simplify_rings_guarded).
+     * Returns 0 when out of memory; *out is free()d by the caller.
+     */
+    int wm_side_pieces(const wm_rings *rings, const wm_refine_opts *o,
+                       wm_side_piece **out, size_t *n);
+
+    /**
      * Triangulates one polygon as wm_cdt_triangulate does (same contract
      * for pts, ring_start, nrings), then refines it (Ruppert 1995, with
      * Shewchuk's "Delaunay refinement" rules): a triangle whose smallest
@@ -80,16 +91,18 @@ extern "C"
      * midpoint and than 8 pixels at an end of the side edge (32 times
      * o->simplify when that is less, down to a pixel; half the land
      * gap to the next water along the side where that is less, down to
-     * 1/16 pixel: o->ends), 1/16 pixel elsewhere: no point of the inputs' shore
-     * then lies within half the room of its diametral circle, so refinement
-     * next to the side seldom needs to split it (the extracted shore lies
-     * within about a pixel and SIMPLIFY of the inputs'); then, while a piece is
-     * more than four times as long as a neighbour (or, at a block corner, than
-     * 16 pixels: four times 4 pixels assumed beyond it), it is halved too.
-     * Rounds of batch insertion (into the triangulation kept from the round
-     * before: wm_cdt_insert, wm_cdt_split) repeat until nothing is bad or a
-     * round changes nothing; bounds on rounds and points stop a run that does
-     * not converge (then `left` counts what remains).
+     * 1/16 pixel: o->ends; at a block corner, the room at the corner where
+     * that is less, down to 1/16 pixel), 1/16 pixel elsewhere: no point of the
+     * inputs' shore then lies within half the room of its diametral circle, so
+     * refinement next to the side seldom needs to split it (the extracted shore
+     * lies within about a pixel and SIMPLIFY of the inputs'); then, while a
+     * piece is more than four times as long as a neighbour (or, at a block
+     * corner, than 16 pixels: four times 4 pixels assumed beyond it, or the
+     * room at the corner where that is less), it is halved too. Rounds of batch
+     * insertion (into the triangulation kept from the round before:
+     * wm_cdt_insert, wm_cdt_split) repeat until nothing is bad or a round
+     * changes nothing; bounds on rounds and points stop a run that does not
+     * converge (then `left` counts what remains).
      *
      * Guarantee (Ruppert, exact arithmetic): min_angle up to 20.7 degrees
      * is met when no input angle is below 60 degrees. Here triangles at an

@@ -89,6 +89,12 @@ typedef struct
     size_t n, nr;
     wm_i128 tol2;
     const wm_ctx *ctx;
+    /* the side guard: pieces of the block square's edges per side (0: x =
+     * 0, 1: x = size, 2: y = 0, 3: y = size), ascending along it, and the
+     * longest per side; size 0 when off */
+    wm_side_piece *by_side[4]; /* a before b along the side */
+    size_t nside[4];
+    int64_t longest[4], size;
     uint32_t *ring_of; /* ring of each input vertex */
     unsigned char *kept;
     uint32_t *nk;    /* next kept vertex (valid for kept vertices) */
@@ -243,6 +249,123 @@ static uint32_t s_far(const simp *sp, uint32_t a, uint32_t b)
     return best;
 }
 
+/* ---- the side guard --------------------------------------------------- */
+
+/* Distance of p to side k of the square, and its position along it. */
+static int64_t s_side_dist(wm_pt p, int k, int64_t size)
+{
+    return k == 0 ? p.x : k == 1 ? size - p.x : k == 2 ? p.y : size - p.y;
+}
+
+static int64_t s_along(wm_pt p, int k)
+{
+    return k < 2 ? p.y : p.x;
+}
+
+/* Whether segment p-q enters the open diametral circle of piece c. In
+ * doubled coordinates the circle's centre is c.a + c.b and its diameter
+ * |c.b - c.a|, so everything stays on the integers. */
+static int s_enters(wm_pt p, wm_pt q, const wm_side_piece *c)
+{
+    const wm_pt P = {2 * p.x, 2 * p.y}, Q = {2 * q.x, 2 * q.y};
+    const wm_pt C = {c->a.x + c->b.x, c->a.y + c->b.y};
+    const int64_t dx = (int64_t)Q.x - P.x, dy = (int64_t)Q.y - P.y;
+    const int64_t len2 = dx * dx + dy * dy;
+    const int64_t ex = (int64_t)c->b.x - c->a.x, ey = (int64_t)c->b.y - c->a.y;
+    const wm_i128 r2 = (wm_i128)(ex * ex + ey * ey) * (len2 ? len2 : 1);
+    return s_dnum(P, Q, C, len2) < r2;
+}
+
+static int s_same_pt(wm_pt a, wm_pt b)
+{
+    return a.x == b.x && a.y == b.y;
+}
+
+/* Whether piece c objects to the shortcut a-b: it enters c's circle, does
+ * not end at an end of c, and none of the input edges from a to b enters
+ * the circle. */
+static int s_objects(const simp *sp, uint32_t a, uint32_t b,
+                     const wm_side_piece *c)
+{
+    const wm_pt pa = sp->P[a], pb = sp->P[b];
+    if (s_same_pt(pa, c->a) || s_same_pt(pa, c->b) || s_same_pt(pb, c->a) ||
+        s_same_pt(pb, c->b) || !s_enters(pa, pb, c))
+        return 0;
+    for (uint32_t i = a, j = s_nxt(sp, a);; i = j, j = s_nxt(sp, j))
+    {
+        if (s_enters(sp->P[i], sp->P[j], c))
+            return 0;
+        if (j == b)
+            return 1;
+    }
+}
+
+/* Whether a piece objects to the shortcut a-b (s_objects). A circle is
+ * entered only where the shortcut comes nearer the side than the piece's
+ * half length, and overlaps it along the side. */
+static int s_guarded(const simp *sp, uint32_t a, uint32_t b)
+{
+    const wm_pt pa = sp->P[a], pb = sp->P[b];
+    for (int k = 0; k < 4; k++)
+    {
+        const int64_t da = s_side_dist(pa, k, sp->size);
+        const int64_t db = s_side_dist(pb, k, sp->size);
+        if (sp->nside[k] == 0 || 2 * (da < db ? da : db) >= sp->longest[k])
+            continue;
+        const int64_t ua = s_along(pa, k), ub = s_along(pb, k);
+        const int64_t lo = ua < ub ? ua : ub, hi = ua < ub ? ub : ua;
+        const wm_side_piece *c = sp->by_side[k];
+        /* the first piece ending past lo (pieces do not overlap) */
+        size_t l = 0, h = sp->nside[k];
+        while (l < h)
+        {
+            const size_t m = l + (h - l) / 2;
+            if (s_along(c[m].b, k) <= lo)
+                l = m + 1;
+            else
+                h = m;
+        }
+        for (size_t m = l; m < sp->nside[k] && s_along(c[m].a, k) < hi; m++)
+            if (s_objects(sp, a, b, &c[m]))
+                return 1;
+    }
+    return 0;
+}
+
+static int s_piece_cmp(const void *x, const void *y)
+{
+    /* on one side either x or y is constant */
+    const wm_side_piece *c = x, *d = y;
+    const int64_t u = (int64_t)c->a.x + c->a.y, v = (int64_t)d->a.x + d->a.y;
+    return (u > v) - (u < v);
+}
+
+/* The side guard's pieces, per side, ascending along it. */
+static wm_status s_guard_setup(simp *sp, const wm_side_piece *pc, size_t n,
+                               int32_t size)
+{
+    size_t cap[4] = {0, 0, 0, 0};
+    for (size_t i = 0; i < n; i++)
+    {
+        const wm_side_piece c = pc[i];
+        const int k =
+            c.a.x == c.b.x ? (c.a.x == 0 ? 0 : 1) : (c.a.y == 0 ? 2 : 3);
+        const int fwd = s_along(c.a, k) < s_along(c.b, k);
+        const wm_side_piece o = {fwd ? c.a : c.b, fwd ? c.b : c.a};
+        const int64_t len = s_along(o.b, k) - s_along(o.a, k);
+        sp->longest[k] = len > sp->longest[k] ? len : sp->longest[k];
+        if (!wm_push((void **)&sp->by_side[k], &sp->nside[k], &cap[k], &o,
+                     sizeof o))
+            return wm_fail(sp->ctx, WM_ERR_NOMEM, "simplify: out of memory");
+    }
+    for (int k = 0; k < 4; k++)
+        if (sp->nside[k] > 1)
+            qsort(sp->by_side[k], sp->nside[k], sizeof *sp->by_side[k],
+                  s_piece_cmp);
+    sp->size = n ? size : 0;
+    return WM_OK;
+}
+
 /* Douglas-Peucker on the span a..b (PostGIS ptarray_simplify_in_place
  * structure): marks the kept vertices strictly between a and b. Returns 0
  * when cancelled (checked before each search: one scans at most the ring,
@@ -258,8 +381,9 @@ static int s_dp(simp *sp, uint32_t a, uint32_t b)
             return 0;
         const uint32_t i2 = sp->stack[top - 1];
         const uint32_t split = s_far(sp, i1, i2);
-        if (split != S_NONE &&
-            wm_seg_dist2_exceeds(sp->P[i1], sp->P[i2], sp->P[split], sp->tol2))
+        if (split != S_NONE && (wm_seg_dist2_exceeds(sp->P[i1], sp->P[i2],
+                                                     sp->P[split], sp->tol2) ||
+                                (sp->size && s_guarded(sp, i1, i2))))
         {
             sp->kept[split] = 1;
             sp->stack[top++] = split; /* depth <= ring length */
@@ -1176,10 +1300,20 @@ static void s_free(simp *sp)
     free(sp->enc_in);
     free(sp->enc_out);
     free(sp->qs);
+    for (int k = 0; k < 4; k++)
+        free(sp->by_side[k]);
 }
 
 wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
                             wm_rings *out, const wm_ctx *ctx)
+{
+    return wm_simplify_rings_guarded(in, size, tol, NULL, 0, out, ctx);
+}
+
+wm_status wm_simplify_rings_guarded(const wm_rings *in, int32_t size,
+                                    double tol, const wm_side_piece *pieces,
+                                    size_t npieces, wm_rings *out,
+                                    const wm_ctx *ctx)
 {
     wm_rings_clear(out);
     if (!(tol > 0.0) || in->nrings == 0)
@@ -1189,6 +1323,8 @@ wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
     simp sp;
     memset(&sp, 0, sizeof sp);
     wm_status st = s_setup(&sp, in, tol, ctx);
+    if (st == WM_OK)
+        st = s_guard_setup(&sp, pieces, npieces, size);
     if (st == WM_OK && !s_dp_rings(&sp, size))
         st = wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
     if (st == WM_OK)

@@ -11,6 +11,14 @@ extern "C"
 {
 #endif
 
+    /** A piece of a ring edge on the block square, from a to b
+     *  (block-local): what Delaunay refinement may not split (refine.h,
+     *  wm_side_pieces). */
+    typedef struct
+    {
+        wm_pt a, b;
+    } wm_side_piece;
+
     /**
      * Simplifies every ring of `in` with Douglas-Peucker, tolerance `tol`
      * (lattice units), into `out` (cleared first; caller frees with
@@ -35,6 +43,21 @@ extern "C"
      */
     wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,
                                 wm_rings *out, const wm_ctx *ctx);
+
+    /**
+     * wm_simplify_rings, where in addition no simplified edge enters the
+     * diametral circle of one of the npieces `pieces` (of ring edges on the
+     * block square) unless the input edges it replaces enter it too, or it
+     * ends at an end of that piece. Refinement (MIN_ANGLE) cannot split
+     * those pieces: a shore carried into their circle would leave skinny
+     * triangles on them (a shore running along a block side, straightened
+     * towards it). Vertices are kept as Douglas-Peucker keeps them (the
+     * farthest of the span first).
+     */
+    wm_status wm_simplify_rings_guarded(const wm_rings *in, int32_t size,
+                                        double tol, const wm_side_piece *pieces,
+                                        size_t npieces, wm_rings *out,
+                                        const wm_ctx *ctx);
 
 #ifdef __cplusplus
 }
