@@ -64,6 +64,7 @@ typedef struct
 {
     int ok_orient, ok_area, ok_used, ok_edge;
     size_t below, ntris, nextra;
+    double sharpest; /* the smallest angle, degrees */
     double area_in, area_out, worst_edge, perimeter;
     wm_refine_stats st;
 } result;
@@ -117,8 +118,10 @@ static result run(const wm_rings *r, const wm_refine_opts *o)
             const double len = hypot(u.x - v.x, u.y - v.y);
             res.worst_edge = len > res.worst_edge ? len : res.worst_edge;
         }
-        if (o->min_angle > 0 && angle_min(a, b, c) < o->min_angle - 1e-9)
+        const double am = angle_min(a, b, c);
+        if (o->min_angle > 0 && am < o->min_angle - 1e-9)
             res.below++;
+        res.sharpest = t == 0 || am < res.sharpest ? am : res.sharpest;
     }
     for (size_t i = 0; i < r->npts; i++)
         res.ok_used &= used[i];
@@ -627,6 +630,45 @@ int main(void)
         TAP_EQ(sa.left, 0, "a shore past a corner: no sharp triangle left");
         wm_rings_free(&ra);
         wm_rings_free(&rb);
+    }
+    /* a shore leaving a side piece that may not be split (no room
+     * callback: not graded) with its first vertex near the crossing: the
+     * triangle on the piece has 17.6 degrees, and its circumcentre lies
+     * inside the piece's diametral circle, where it would make one of 5
+     * degrees; it is not taken */
+    {
+        const int S = 51200;
+        const int a[] = {S, 10000, S, 13375, S - 5000, 13375, S - 1000, 10220};
+        wm_rings ra = ring_of(a, 4);
+        const wm_refine_opts o = {20, 0, S, 0, 0, NULL, NULL, NULL, WM_Q};
+        const result res = run(&ra, &o);
+        TAP_OK(res.ntris > 0 && res.sharpest > 17.5,
+               "a circumcentre by a kept side piece: sharpest angle %.1f",
+               res.sharpest);
+        wm_rings_free(&ra);
+    }
+    /* the tip of a land wedge 20 units off the side x = S, 900 units from
+     * where the shore leaves it, inside the piece that ends the side edge
+     * (8 pixels at most): the room there falls where it should rise from
+     * the end, so that piece is graded too, and no sharp triangle is left
+     * (1 when the end piece stays whole) */
+    {
+        const int S = 51200;
+        const int a[] = {S - 20000, 10000,     S,         10000,     S,
+                         30000,     S - 20000, 30000,     S - 20000, 11000,
+                         S - 20,    10900,     S - 20000, 10800};
+        wm_rings ra = ring_of(a, 7);
+        const shores sh = {3,
+                           {{S - 20000, 10000, S + 20000, 10000},
+                            {S - 20000, 11000, S - 20, 10900},
+                            {S - 20, 10900, S - 20000, 10800}}};
+        const wm_refine_opts o = {20,          0,    S,   0, 0, room_of_shores,
+                                  (void *)&sh, NULL, WM_Q};
+        const result res = run(&ra, &o);
+        TAP_OK(res.ntris > 0 && res.st.left == 0,
+               "a land tip by an end piece: %zu sharp triangles left",
+               res.st.left);
+        wm_rings_free(&ra);
     }
     /* invalid input is the CDT's error */
     {

@@ -283,20 +283,48 @@ typedef struct
  * midpoint, clear of the inputs' shore by half the room. Everything here
  * is a function of global positions and of the water along the side
  * only, so both blocks sharing the side find the same points. */
+/* Whether the room along piece (u, v) of a side edge rises from the end(s)
+ * of the edge it touches (end0: e0 = u, end1: e1 = v) to its midpoint,
+ * where it is `room`: read at its quarter points (capped at its length).
+ * Where a shore leaves the side at an end, the room grows with the distance
+ * from it; where it falls, something nearer lies beside the piece (the tip
+ * of a land wedge just off the side), whose vertex an end piece of 8
+ * pixels would leave inside its diametral circle (a triangle of 4 degrees
+ * on the synthetic L3, seed 2). */
+static int room_rises(const wm_refine_opts *o, int vertical, int64_t F,
+                      int64_t u, int64_t v, double room, int end0, int end1)
+{
+    const double len = (double)(v - u);
+    const int64_t q1 = wm_floordiv(3 * u + v, 4),
+                  q3 = wm_floordiv(u + 3 * v, 4);
+    const double r1 = vertical ? o->room(o->room_user, F, q1, len)
+                               : o->room(o->room_user, q1, F, len);
+    const double r3 = vertical ? o->room(o->room_user, F, q3, len)
+                               : o->room(o->room_user, q3, F, len);
+    return end0 && end1 ? room >= r1 && room >= r3
+           : end0       ? r1 <= room && room <= r3
+                        : r3 <= room && room <= r1;
+}
+
 static int grade_side(const wm_refine_opts *o, int vertical, int64_t F,
                       int64_t u, int64_t v, const side_span *e, lbuf *cut)
 {
     const int64_t at0 = u == e->e0 ? e->min0 : INT64_MAX;
     const int64_t at1 = v == e->e1 ? e->min1 : INT64_MAX;
     const int64_t least = at0 < at1 ? at0 : at1;
-    if (v - u <= (least < INT64_MAX ? least : GRADE_INNER))
+    if (v - u <= GRADE_INNER)
         return 1;
     const int64_t m = wm_floordiv(u + v, 2);
     const double len = (double)(v - u);
     const double room = vertical ? o->room(o->room_user, F, m, len)
                                  : o->room(o->room_user, m, F, len);
-    return len <= room ||
-           (grade_side(o, vertical, F, u, m, e, cut) && lpush(cut, m) &&
+    if (len <= room)
+        return 1;
+    if (least < INT64_MAX && v - u <= least &&
+        room_rises(o, vertical, F, u, v, room, at0 < INT64_MAX,
+                   at1 < INT64_MAX))
+        return 1;
+    return (grade_side(o, vertical, F, u, m, e, cut) && lpush(cut, m) &&
             grade_side(o, vertical, F, m, v, e, cut));
 }
 
@@ -893,22 +921,28 @@ static int circumcentre(const refiner *r, size_t t, wm_pt *c)
 
 /* Marks ring position k's edge to be split; 0 when it may not be (on the
  * block square, or too short). */
-static int want_split(refiner *r, int64_t k)
+/* The ends of the ring edge at ring position k. */
+static void ring_edge(const refiner *r, int64_t k, wm_pt *a, wm_pt *b)
 {
     const size_t q0 = (size_t)k;
     const size_t q = wm_run_of(r->rstart, r->nrings, q0);
     const size_t len = r->rstart[q + 1] - r->rstart[q];
-    const wm_pt a = r->P[r->ring.a[q0]];
-    const wm_pt b =
-        r->P[r->ring.a[r->rstart[q] + (q0 - r->rstart[q] + 1) % len]];
+    *a = r->P[r->ring.a[q0]];
+    *b = r->P[r->ring.a[r->rstart[q] + (q0 - r->rstart[q] + 1) % len]];
+}
+
+static int want_split(refiner *r, int64_t k)
+{
+    wm_pt a, b;
+    ring_edge(r, k, &a, &b);
     /* a split must add a vertex, and never one on the block square: the
      * block across would not have it */
     const wm_pt m = midpoint(a, b);
     if (r->nosplit || on_square(r, a, b) || wm_pt_eq(m, a) || wm_pt_eq(m, b) ||
         on_square_pt(r, m))
         return 0;
-    r->nsplit += !r->split[q0];
-    r->split[q0] = 1;
+    r->nsplit += !r->split[k];
+    r->split[k] = 1;
     return 1;
 }
 
@@ -1045,6 +1079,30 @@ static int add_steiner(refiner *r, size_t t, size_t hold, wm_pt c)
     return 1;
 }
 
+/* Smallest angle (its cosine, larger is sharper) of triangle p q s. */
+static double cos_sharpest(wm_pt p, wm_pt q, wm_pt s)
+{
+    const double l[3] = {d2(q, s), d2(p, s), d2(p, q)};
+    int k = 0;
+    for (int i = 1; i < 3; i++)
+        k = l[i] < l[k] ? i : k;
+    const double b2 = l[(k + 1) % 3], c2 = l[(k + 2) % 3];
+    return (b2 + c2 - l[k]) / (2 * sqrt(b2 * c2));
+}
+
+/* Whether point c, with ring edge pos (on the block square, kept) as its
+ * base, would make a sharper triangle than t. */
+static int kept_worse(const refiner *r, size_t t, int64_t pos, wm_pt c)
+{
+    wm_pt a, b;
+    ring_edge(r, pos, &a, &b);
+    if (!on_square(r, a, b))
+        return 0;
+    const uint32_t *v = r->tris + 3 * t;
+    return cos_sharpest(a, b, c) >
+           cos_sharpest(r->P[v[0]], r->P[v[1]], r->P[v[2]]);
+}
+
 /* What bad triangle t does this round: splits a ring edge or adds its
  * circumcentre (1), waits for a neighbour's change (2), can do nothing
  * (0), or runs out of memory (-1). */
@@ -1073,8 +1131,11 @@ static int cure(refiner *r, size_t t, int why)
     /* a ring edge that stays (on the block square, too short, or after a
      * split broke the CDT): a sharp triangle whose circumcentre lies inside
      * takes it anyway (that empties its circumcircle; only the edge kept is
-     * encroached); a long one takes the middle of its longest inner edge
-     * (edges halve: this ends) */
+     * encroached), unless the edge kept is a side piece it would make a
+     * sharper triangle on (kept_worse); a long one takes the middle of its
+     * longest inner edge (edges halve: this ends) */
+    if (!(why & LONG) && kept_worse(r, t, pos, c))
+        return 0;
     if (!(why & LONG))
         return hold == SIZE_MAX || on_ring_edge(r, hold, c)
                    ? 0

@@ -65,7 +65,10 @@ extern "C"
 
     /**
      * The pieces every ring edge of `rings` on the block square is cut into
-     * by the rule wm_refine_triangulate applies (below), with the same o.
+     * by the rule wm_refine_triangulate applies (below), with the same o
+     * (o->ends built from rings with the same side edges: simplification
+     * keeps every vertex on the square, so raw and simplified rings
+     * qualify).
      * They are what refinement may not split; simplification keeps the
      * shore out of their diametral circles (wm_simplify_rings_guarded).
      * Returns 0 when out of memory; *out is free()d by the caller.
@@ -92,7 +95,9 @@ extern "C"
      * o->simplify when that is less, down to a pixel; half the land
      * gap to the next water along the side where that is less, down to
      * 1/16 pixel: o->ends; at a block corner, the room at the corner where
-     * that is less, down to 1/16 pixel), 1/16 pixel elsewhere: no point of the
+     * that is less, down to 1/16 pixel; and an end piece anyway while its
+     * room does not rise from the end to its midpoint), 1/16 pixel
+     * elsewhere: no point of the
      * inputs' shore then lies within half the room of its diametral circle, so
      * refinement next to the side seldom needs to split it (the extracted shore
      * lies within about a pixel and SIMPLIFY of the inputs'); then, while a

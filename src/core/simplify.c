@@ -19,6 +19,11 @@
  *     of the square keeps its farthest vertex whatever the tolerance:
  *     straightened, it would run along the side and cover there, in this
  *     block only, a piece the neighbouring block leaves dry.
+ *     With side pieces (wm_simplify_rings_guarded, MIN_ANGLE), a shortcut
+ *     that enters the open diametral circle of a piece which refinement
+ *     may not split, where none of the edges it replaces enters it and it
+ *     does not end at an end of that piece, is split as one beyond the
+ *     tolerance (the side guard; exact, in doubled lattice coordinates).
  *  2. Repairs, in the spirit of Saalfeld (1999). The output must have no
  *     two segments that cross or touch (consecutive segments of one ring
  *     share their vertex but may not fold back onto each other), every
@@ -36,7 +41,9 @@
  *     adds vertices, so the loop ends (in the limit with the valid input);
  *     it is bounded anyway and reports WM_ERR_INTERNAL on the bound.
  *
- * Complexity: DP is O(n log n) typical, O(n^2) worst (as PostGIS); the
+ * Complexity: DP is O(n log n) typical, O(n^2) worst (as PostGIS), plus,
+ * with the side guard, one pass over a span per shortcut that comes near a
+ * side (each edge reads the pieces near it by binary search); the
  * conflict check is O(m * k) for m output segments and k segments per
  * grid cell; nesting checks cost one wm_holes_nesting per round (usually
  * one or two rounds).
@@ -93,6 +100,8 @@ typedef struct
      * 0, 1: x = size, 2: y = 0, 3: y = size), ascending along it, and the
      * longest per side; size 0 when off */
     wm_side_piece *by_side[4]; /* a before b along the side */
+    uint32_t *mark[4];         /* s_guarded's, per piece */
+    uint32_t tick;
     size_t nside[4];
     int64_t longest[4], size;
     uint32_t *ring_of; /* ring of each input vertex */
@@ -281,52 +290,84 @@ static int s_same_pt(wm_pt a, wm_pt b)
     return a.x == b.x && a.y == b.y;
 }
 
-/* Whether piece c objects to the shortcut a-b: it enters c's circle, does
- * not end at an end of c, and none of the input edges from a to b enters
- * the circle. */
-static int s_objects(const simp *sp, uint32_t a, uint32_t b,
-                     const wm_side_piece *c)
+/* The pieces on side k whose circles segment p-q may enter, [*m0, *m1):
+ * a circle is entered only where the segment comes nearer the side than
+ * half the piece's length, and overlaps the piece along the side (pieces
+ * on one side do not overlap). */
+static void s_near(const simp *sp, wm_pt p, wm_pt q, int k, size_t *m0,
+                   size_t *m1)
 {
-    const wm_pt pa = sp->P[a], pb = sp->P[b];
-    if (s_same_pt(pa, c->a) || s_same_pt(pa, c->b) || s_same_pt(pb, c->a) ||
-        s_same_pt(pb, c->b) || !s_enters(pa, pb, c))
-        return 0;
-    for (uint32_t i = a, j = s_nxt(sp, a);; i = j, j = s_nxt(sp, j))
+    const int64_t dp = s_side_dist(p, k, sp->size);
+    const int64_t dq = s_side_dist(q, k, sp->size);
+    *m0 = *m1 = 0;
+    if (sp->nside[k] == 0 || 2 * (dp < dq ? dp : dq) >= sp->longest[k])
+        return;
+    const int64_t up = s_along(p, k), uq = s_along(q, k);
+    const int64_t lo = up < uq ? up : uq, hi = up < uq ? uq : up;
+    const wm_side_piece *c = sp->by_side[k];
+    size_t l = 0, h = sp->nside[k]; /* the first piece ending past lo */
+    while (l < h)
     {
-        if (s_enters(sp->P[i], sp->P[j], c))
-            return 0;
-        if (j == b)
-            return 1;
+        const size_t m = l + (h - l) / 2;
+        if (s_along(c[m].b, k) <= lo)
+            l = m + 1;
+        else
+            h = m;
     }
+    *m0 = *m1 = l;
+    while (*m1 < sp->nside[k] && s_along(c[*m1].a, k) < hi)
+        (*m1)++;
 }
 
-/* Whether a piece objects to the shortcut a-b (s_objects). A circle is
- * entered only where the shortcut comes nearer the side than the piece's
- * half length, and overlaps it along the side. */
-static int s_guarded(const simp *sp, uint32_t a, uint32_t b)
+/* Whether the shortcut a-b enters the circle of a piece that does not end
+ * where it does, and none of the input edges from a to b enters that
+ * circle. The pieces it enters are marked first, the input edges clear
+ * their marks in one pass, and a mark left objects (work linear in the
+ * span and in the pieces near it). */
+static int s_guarded(simp *sp, uint32_t a, uint32_t b)
 {
     const wm_pt pa = sp->P[a], pb = sp->P[b];
+    if (++sp->tick == 0) /* wrapped: no mark may look current */
+    {
+        for (int k = 0; k < 4; k++)
+            memset(sp->mark[k], 0, sp->nside[k] * sizeof *sp->mark[k]);
+        sp->tick = 1;
+    }
+    int any = 0;
+    size_t m0, m1;
     for (int k = 0; k < 4; k++)
     {
-        const int64_t da = s_side_dist(pa, k, sp->size);
-        const int64_t db = s_side_dist(pb, k, sp->size);
-        if (sp->nside[k] == 0 || 2 * (da < db ? da : db) >= sp->longest[k])
-            continue;
-        const int64_t ua = s_along(pa, k), ub = s_along(pb, k);
-        const int64_t lo = ua < ub ? ua : ub, hi = ua < ub ? ub : ua;
-        const wm_side_piece *c = sp->by_side[k];
-        /* the first piece ending past lo (pieces do not overlap) */
-        size_t l = 0, h = sp->nside[k];
-        while (l < h)
+        s_near(sp, pa, pb, k, &m0, &m1);
+        for (size_t m = m0; m < m1; m++)
         {
-            const size_t m = l + (h - l) / 2;
-            if (s_along(c[m].b, k) <= lo)
-                l = m + 1;
-            else
-                h = m;
+            const wm_side_piece *c = &sp->by_side[k][m];
+            if (!s_same_pt(pa, c->a) && !s_same_pt(pa, c->b) &&
+                !s_same_pt(pb, c->a) && !s_same_pt(pb, c->b) &&
+                s_enters(pa, pb, c))
+            {
+                sp->mark[k][m] = sp->tick;
+                any = 1;
+            }
         }
-        for (size_t m = l; m < sp->nside[k] && s_along(c[m].a, k) < hi; m++)
-            if (s_objects(sp, a, b, &c[m]))
+    }
+    for (uint32_t i = a, j = s_nxt(sp, a); any; i = j, j = s_nxt(sp, j))
+    {
+        for (int k = 0; k < 4; k++)
+        {
+            s_near(sp, sp->P[i], sp->P[j], k, &m0, &m1);
+            for (size_t m = m0; m < m1; m++)
+                if (sp->mark[k][m] == sp->tick &&
+                    s_enters(sp->P[i], sp->P[j], &sp->by_side[k][m]))
+                    sp->mark[k][m] = 0;
+        }
+        if (j == b)
+            break;
+    }
+    for (int k = 0; any && k < 4; k++)
+    {
+        s_near(sp, pa, pb, k, &m0, &m1);
+        for (size_t m = m0; m < m1; m++)
+            if (sp->mark[k][m] == sp->tick)
                 return 1;
     }
     return 0;
@@ -359,9 +400,15 @@ static wm_status s_guard_setup(simp *sp, const wm_side_piece *pc, size_t n,
             return wm_fail(sp->ctx, WM_ERR_NOMEM, "simplify: out of memory");
     }
     for (int k = 0; k < 4; k++)
+    {
         if (sp->nside[k] > 1)
             qsort(sp->by_side[k], sp->nside[k], sizeof *sp->by_side[k],
                   s_piece_cmp);
+        sp->mark[k] =
+            calloc(sp->nside[k] ? sp->nside[k] : 1, sizeof *sp->mark[k]);
+        if (!sp->mark[k])
+            return wm_fail(sp->ctx, WM_ERR_NOMEM, "simplify: out of memory");
+    }
     sp->size = n ? size : 0;
     return WM_OK;
 }
@@ -1301,7 +1348,10 @@ static void s_free(simp *sp)
     free(sp->enc_out);
     free(sp->qs);
     for (int k = 0; k < 4; k++)
+    {
         free(sp->by_side[k]);
+        free(sp->mark[k]);
+    }
 }
 
 wm_status wm_simplify_rings(const wm_rings *in, int32_t size, double tol,

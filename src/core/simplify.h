@@ -53,6 +53,12 @@ extern "C"
      * triangles on them (a shore running along a block side, straightened
      * towards it). Vertices are kept as Douglas-Peucker keeps them (the
      * farthest of the span first).
+     *
+     * @param pieces  npieces segments on the block square's sides (x == 0,
+     *                x == size, y == 0 or y == size), those on one side not
+     *                overlapping (they may share ends); NULL when npieces
+     *                is 0 (then this is wm_simplify_rings)
+     * @return as wm_simplify_rings
      */
     wm_status wm_simplify_rings_guarded(const wm_rings *in, int32_t size,
                                         double tol, const wm_side_piece *pieces,
