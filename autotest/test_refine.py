@@ -75,8 +75,10 @@ def small_input_angles(path):
 
 
 def stats(text):
+    """[points added, at input angles, others, of those at a block side]"""
     m = re.search(r'refinement: (\d+) points added; (\d+) triangles below MIN_ANGLE at input '
-                  r'angles .*?; (\d+) others', text)
+                  r'angles .*?; (\d+) others .*?, (\d+) of them below MIN_ANGLE at a block side',
+                  text)
     assert m, text
     return [int(v) for v in m.groups()]
 
@@ -92,7 +94,7 @@ def refined(wm, tmp_path_factory):
 
 def test_min_angle_met_but_where_reported(refined):
     path, text = refined['angle']
-    added, at_input, others = stats(text)
+    added, at_input, others, at_side = stats(text)
     tris = triangles(path)
     plain = triangles(refined['plain'])
     assert added > 0 and len(tris) > len(plain)
@@ -113,12 +115,16 @@ def test_min_angle_met_but_where_reported(refined):
         if not any(math.dist(c, a) < 20 * size for a in apices.get(block, ())):
             far.append(pts)
     assert not far, far
+    # what -stats counts at a block side (sharp, not at an input angle,
+    # touching one) is among those the mesh has there
+    sharp_at_side = [t for t in below if any(on_side(q) for q in t[2])]
+    assert 0 < at_side <= min(others, len(sharp_at_side)), (at_side, others, len(sharp_at_side))
 
 
 def test_max_edge_met_everywhere(refined):
     path, text = refined['edge']
-    added, at_input, others = stats(text)
-    assert added > 0 and others == 0
+    added, at_input, others, at_side = stats(text)
+    assert added > 0 and others == 0 and at_side == 0
     longest = max(math.dist(t[2][k], t[2][(k + 1) % 3]) for t in triangles(path) for k in range(3))
     assert longest <= 25 + 1e-6, longest
 

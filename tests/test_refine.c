@@ -209,7 +209,7 @@ static int shared_side(const wm_rings *ra, const wm_rings *rb, int S,
     const wm_refine_opts ob = {20,         0,    S,   S, 0, room_of_shores,
                                (void *)sh, NULL, WM_Q};
     int32_t yb[512];
-    wm_refine_stats sb = {0, 0, 0};
+    wm_refine_stats sb = {0, 0, 0, 0};
     *na = side_points(ra, &oa, S, ya, 510, sa);
     const int nb = side_points(rb, &ob, 0, yb, 510, &sb);
     int differ = *na != nb;
@@ -339,7 +339,7 @@ int main(void)
         uint32_t *tris = NULL;
         wm_pt *extra = NULL;
         size_t nt = 0, nx = 0;
-        wm_refine_stats st = {0, 0, 0};
+        wm_refine_stats st = {0, 0, 0, 0};
         const wm_status rc = wm_refine_triangulate(r.pts, r.start, 1, &o, &tris,
                                                    &nt, &extra, &nx, &st, NULL);
         size_t side = 0, off = 0;
@@ -429,7 +429,7 @@ int main(void)
                 20,          0,    S,   S, 0, with ? room_of_shores : NULL,
                 (void *)&sh, NULL, WM_Q};
             int32_t ya[64], yb[64];
-            wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
+            wm_refine_stats sa = {0, 0, 0, 0}, sb = {0, 0, 0, 0};
             const int na = side_points(&ra, &oa, S, ya, 64, &sa);
             const int nb = side_points(&rb, &ob, 0, yb, 64, &sb);
             fail += na < 0 || nb < 0;
@@ -487,7 +487,7 @@ int main(void)
                 20,  0, S, S, 0, room_of_shores, (void *)&sh, with ? &eb : NULL,
                 WM_Q};
             int32_t ya[512], yb[512];
-            wm_refine_stats sa = {0, 0, 0}, sb = {0, 0, 0};
+            wm_refine_stats sa = {0, 0, 0, 0}, sb = {0, 0, 0, 0};
             const int na = side_points(&ra, &oa, S, ya, 512, &sa);
             const int nb = side_points(&rb, &ob, 0, yb, 512, &sb);
             fail += na < 0 || nb < 0 || na >= 512;
@@ -541,7 +541,7 @@ int main(void)
                                       0,           0,    room_of_shores,
                                       (void *)&sh, NULL, k ? 0.0 : WM_Q};
             int32_t y[512];
-            wm_refine_stats st = {0, 0, 0};
+            wm_refine_stats st = {0, 0, 0, 0};
             const int n = side_points(&ra, &o, S, y, 512, &st);
             fail += n <= 0 || n >= 512;
             first[k] = n > 0 ? y[0] - 10000 : 0;
@@ -576,7 +576,7 @@ int main(void)
         const shores sh = {1, {{S - 30, 19000, S - 30, 21000}}};
         int32_t ya[512];
         int na, ratio = 0;
-        wm_refine_stats sa = {0, 0, 0};
+        wm_refine_stats sa = {0, 0, 0, 0};
         const int differ = shared_side(&ra, &rb, S, &sh, ya, &na, &sa);
         int32_t y[514], shortest = H;
         int n = 0;
@@ -621,7 +621,7 @@ int main(void)
                             {S - 12100, S - 20000, S + 20000, S - 20000}}};
         int32_t ya[512];
         int na;
-        wm_refine_stats sa = {0, 0, 0};
+        wm_refine_stats sa = {0, 0, 0, 0};
         const int differ = shared_side(&ra, &rb, S, &sh, ya, &na, &sa);
         TAP_OK(na > 0 && S - ya[na - 1] <= 86,
                "a shore past a corner: the corner's piece %d units",
@@ -645,6 +645,11 @@ int main(void)
         TAP_OK(res.ntris > 0 && res.sharpest > 17.5,
                "a circumcentre by a kept side piece: sharpest angle %.1f",
                res.sharpest);
+        TAP_OK(res.st.at_side == res.below && res.below > 0 &&
+                   res.st.left >= res.st.at_side,
+               "a circumcentre by a kept side piece: %zu sharp triangles "
+               "counted at the side, of %zu",
+               res.st.at_side, res.below);
         wm_rings_free(&ra);
     }
     /* the tip of a land wedge 20 units off the side x = S, 900 units from

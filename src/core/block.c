@@ -316,7 +316,7 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
     wm_side_ends ends;
     const wm_refine_opts ro =
         refine_opts(s, res->bx, res->by, opts, &si, &ends);
-    wm_refine_stats rs = {0, 0, 0};
+    wm_refine_stats rs = {0, 0, 0, 0};
     size_t cap = 0;
     wm_status st = WM_OK;
     memset(&si, 0, sizeof si);
@@ -359,6 +359,7 @@ static wm_status triangulate(wm_block_result *res, const wm_scene *s,
     res->steiner = rs.steiner;
     res->small_input = rs.small_input;
     res->left = rs.left;
+    res->at_side = rs.at_side;
     return st;
 }
 

@@ -64,7 +64,8 @@ extern "C"
         uint32_t *tris;    /**< (owned) */
         wm_pt *xpts;       /**< the mesh's added points (owned; NULL: none) */
         size_t nxpts;
-        size_t steiner, small_input, left; /**< refinement (refine.h) */
+        size_t steiner, small_input, left, at_side; /**< refinement
+                                                      (refine.h) */
         double *z;          /**< per point of rings, then of xpts: its
                                  height, or NULL
                                  without ELEVATION (owned; drape.h) */

@@ -1333,6 +1333,22 @@ static void count_bad(const refiner *r, size_t *left, size_t *small_input)
     }
 }
 
+/* The triangles of the current triangulation below min_angle, not at an
+ * input angle, with a vertex on the block square. */
+static size_t count_at_side(const refiner *r)
+{
+    size_t n = 0;
+    for (size_t t = 0; t < r->ntris; t++)
+    {
+        int input;
+        const uint32_t *v = r->tris + 3 * t;
+        n += (bad(r, t, &input) & SHARP) &&
+             (on_square_pt(r, r->P[v[0]]) || on_square_pt(r, r->P[v[1]]) ||
+              on_square_pt(r, r->P[v[2]]));
+    }
+    return n;
+}
+
 /* Refinement rounds from the current rings and Steiner points. WM_OK with
  * the result set; WM_ERR_INVALID when the CDT refuses the first round
  * (nothing set); WM_ERR_NOMEM. When a later round's changes break the CDT,
@@ -1502,6 +1518,7 @@ wm_status wm_refine_triangulate(const wm_pt *pts, const size_t *ring_start,
         stats->steiner += *nextra;
         stats->small_input += small_input;
         stats->left += left;
+        stats->at_side += o->min_angle > 0 ? count_at_side(&r) : 0;
     }
     goto done;
 nomem:

@@ -61,6 +61,9 @@ extern "C"
                                  between two ring edges (an input angle) */
         size_t left;        /**< other triangles still below min_angle or
                                  with an edge over max_edge */
+        size_t at_side;     /**< of left: below min_angle with a vertex on
+                                 the block square, whose edges refinement
+                                 may not split */
     } wm_refine_stats;
 
     /**

@@ -746,7 +746,7 @@ static const char OPEN_OPTIONS[] =
     "  <Option name='MIN_ANGLE' type='float' default='0' min='0' max='30' "
     "description='Refine the mesh (Steiner points) so that no triangle has "
     "an angle below this, in degrees (0: off; 20.7 guaranteed but at and "
-    "near small input angles)'/>"
+    "near small input angles and at block sides)'/>"
     "  <Option name='MAX_EDGE' type='float' default='0' min='0' "
     "description='Refine the mesh so that no triangle edge is longer than "
     "this (metres; 0: off; at least PIXEL_SIZE)'/>"

@@ -245,7 +245,7 @@ typedef struct
     double wall;
     size_t blocks, polygons, vertices, triangles, mixed_tiles;
     uint64_t samples, pairs, contour_vertices;
-    size_t steiner, small_input, left; /* MIN_ANGLE / MAX_EDGE */
+    size_t steiner, small_input, left, at_side; /* MIN_ANGLE / MAX_EDGE */
 } WMRunStats;
 
 /** A wm_error_fn keeping the first message in *(char **)user (CPLStrdup'ed;

@@ -297,6 +297,7 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
         stats->steiner += res.steiner;
         stats->small_input += res.small_input;
         stats->left += res.left;
+        stats->at_side += res.at_side;
         if (!sink->put(sink->user, &res, prep))
         {
             err = CE_Failure;
@@ -598,9 +599,10 @@ void WMPrintStats(const WMScene *s, const WMRunStats *st)
         printf("refinement: %lu points added; %lu triangles below MIN_ANGLE "
                "at input angles (between two ring edges); %lu others below "
                "MIN_ANGLE or over MAX_EDGE (near input angles below 60 "
-               "degrees, or not converged)\n",
+               "degrees, or not converged), %lu of them below MIN_ANGLE at a "
+               "block side (whose edges refinement may not split)\n",
                (unsigned long)st->steiner, (unsigned long)st->small_input,
-               (unsigned long)st->left);
+               (unsigned long)st->left, (unsigned long)st->at_side);
     const size_t *ws = s->width_source;
     if (ws[0] + ws[1] + ws[2])
         printf("river widths: %lu from WIDTH_FIELD, %lu from WIDTH_BY_CLASS, "
@@ -732,6 +734,7 @@ static void add_stats(WMRunStats *to, const WMRunStats *st)
     to->steiner += st->steiner;
     to->small_input += st->small_input;
     to->left += st->left;
+    to->at_side += st->at_side;
 }
 
 /* Keeps the blocks of batch (n pairs) that are the job's (SHARD). */
