@@ -675,6 +675,32 @@ int main(void)
                res.st.left);
         wm_rings_free(&ra);
     }
+    /* a block wholly inside a lake: whatever the room, its sides are cut
+     * into pieces of at most 256 pixels (refinement took points inside
+     * the diametral circles of longer ones, which it cannot cure) */
+    {
+        const int S = 2048 * WM_Q;
+        const int a[] = {0, 0, S, 0, S, S, 0, S};
+        wm_rings ra = ring_of(a, 4);
+        const shores sh = {1, {{-1e7, -1e7, -1e7 + 1, -1e7}}};
+        const wm_refine_opts o = {20,          0,    S,   0, 0, room_of_shores,
+                                  (void *)&sh, NULL, WM_Q};
+        int32_t y[512];
+        wm_refine_stats st = {0, 0, 0, 0};
+        const int n = side_points(&ra, &o, S, y, 510, &st);
+        int32_t longest = 0, prev = 0;
+        for (int i = 0; i <= n && n < 510; i++)
+        {
+            const int32_t cur = i < n ? y[i] : S;
+            longest = cur - prev > longest ? cur - prev : longest;
+            prev = cur;
+        }
+        TAP_OK(n > 0 && n < 510 && longest <= 256 * WM_Q,
+               "a block inside a lake: %d side points, longest piece %d "
+               "units",
+               n, (int)longest);
+        wm_rings_free(&ra);
+    }
     /* invalid input is the CDT's error */
     {
         wm_rings r;

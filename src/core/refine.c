@@ -258,6 +258,14 @@ static int64_t grade_min(const wm_refine_opts *o)
  * fraction of a pixel inside the block: pieces of a pixel left triangles
  * of 4-8 degrees there on the synthetic L3) */
 #define GRADE_INNER ((int64_t)WM_Q / 16)
+/* The longest piece grading leaves, whatever its room: 256 pixels.
+ * Refinement checks a new point against the ring edges of the triangles
+ * around it, not against a whole diametral circle; one of a piece of
+ * hundreds of metres (a block side deep in a large lake) took interior
+ * points, leaving triangles of 16-19 degrees on pieces of 160-590 m that
+ * nothing could cure (synthetic L1 seed 4, S5). 512 pixels cured one of
+ * the three; 64 added 1-2 % triangles; this adds under 0.1 %. */
+#define GRADE_OUTER ((int64_t)256 * WM_Q)
 
 static int lpush(lbuf *b, int64_t x)
 {
@@ -271,18 +279,6 @@ typedef struct
     int64_t e0, e1, min0, min1;
 } side_span;
 
-/* Appends to cut the points halving piece (u, v) of side edge e,
- * ascending: a piece is halved at its global midpoint while it is longer
- * than its room, o->room at that midpoint (no shore is nearer), and than
- * the end's shortest piece (e->min0, e->min1) at an end of the side edge or
- * GRADE_INNER elsewhere (so a side edge makes at most 16 pieces per pixel,
- * only where the shore runs that close to it, and one query per piece;
- * each query reads the edges near the point, see wm_scene_depth; the
- * recursion is as deep as log2 of the side in pixels). A piece no longer
- * than its room has its diametral circle within half the room of its
- * midpoint, clear of the inputs' shore by half the room. Everything here
- * is a function of global positions and of the water along the side
- * only, so both blocks sharing the side find the same points. */
 /* Whether the room along piece (u, v) of a side edge rises from the end(s)
  * of the edge it touches (end0: e0 = u, end1: e1 = v) to its midpoint,
  * where it is `room`: read at its quarter points (capped at its length).
@@ -306,6 +302,19 @@ static int room_rises(const wm_refine_opts *o, int vertical, int64_t F,
                         : r3 <= room && room <= r1;
 }
 
+/* Appends to cut the points halving piece (u, v) of side edge e,
+ * ascending: a piece is halved at its global midpoint while it is longer
+ * than GRADE_OUTER, or than its room, o->room at that midpoint (no shore
+ * is nearer), and than the end's shortest piece (e->min0, e->min1) at an
+ * end of the side edge (unless the room does not rise from the end,
+ * room_rises) or GRADE_INNER elsewhere (so a side edge makes at most 16 pieces
+ * per pixel, only where the shore runs that close to it, and one query per
+ * piece; each query reads the edges near the point, see wm_scene_depth; the
+ * recursion is as deep as log2 of the side in pixels). A piece no longer
+ * than its room has its diametral circle within half the room of its
+ * midpoint, clear of the inputs' shore by half the room. Everything here
+ * is a function of global positions and of the water along the side
+ * only, so both blocks sharing the side find the same points. */
 static int grade_side(const wm_refine_opts *o, int vertical, int64_t F,
                       int64_t u, int64_t v, const side_span *e, lbuf *cut)
 {
@@ -315,17 +324,18 @@ static int grade_side(const wm_refine_opts *o, int vertical, int64_t F,
     if (v - u <= GRADE_INNER)
         return 1;
     const int64_t m = wm_floordiv(u + v, 2);
-    const double len = (double)(v - u);
-    const double room = vertical ? o->room(o->room_user, F, m, len)
-                                 : o->room(o->room_user, m, F, len);
-    if (len <= room)
-        return 1;
-    if (least < INT64_MAX && v - u <= least &&
-        room_rises(o, vertical, F, u, v, room, at0 < INT64_MAX,
-                   at1 < INT64_MAX))
-        return 1;
-    return (grade_side(o, vertical, F, u, m, e, cut) && lpush(cut, m) &&
-            grade_side(o, vertical, F, m, v, e, cut));
+    if (v - u <= GRADE_OUTER)
+    {
+        const double len = (double)(v - u);
+        const double room = vertical ? o->room(o->room_user, F, m, len)
+                                     : o->room(o->room_user, m, F, len);
+        if (len <= room || (least < INT64_MAX && v - u <= least &&
+                            room_rises(o, vertical, F, u, v, room,
+                                       at0 < INT64_MAX, at1 < INT64_MAX)))
+            return 1;
+    }
+    return grade_side(o, vertical, F, u, m, e, cut) && lpush(cut, m) &&
+           grade_side(o, vertical, F, m, v, e, cut);
 }
 
 static int cmp_u64(const void *a, const void *b)

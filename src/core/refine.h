@@ -93,7 +93,8 @@ extern "C"
      * blocks sharing the side apply alike (so there is no T-junction): with
      * max_edge, at the global lattice multiples of max_edge along the side;
      * with min_angle and o->room, each piece is halved (at its global
-     * midpoint, rounded down) while it is longer than its room at that
+     * midpoint, rounded down) while it is longer than 256 pixels, or than
+     * its room at that
      * midpoint and than 8 pixels at an end of the side edge (32 times
      * o->simplify when that is less, down to a pixel; half the land
      * gap to the next water along the side where that is less, down to
