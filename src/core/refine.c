@@ -283,10 +283,12 @@ typedef struct
  * of the edge it touches (end0: e0 = u, end1: e1 = v) to its midpoint,
  * where it is `room`: read at its quarter points (capped at its length).
  * Where a shore leaves the side at an end, the room grows with the distance
- * from it; where it falls, something nearer lies beside the piece (the tip
- * of a land wedge just off the side), whose vertex an end piece of 8
- * pixels would leave inside its diametral circle (a triangle of 4 degrees
- * on the synthetic L3, seed 2). */
+ * from it (between two ends, a tent: concave, its peak anywhere); where it
+ * falls, something nearer lies beside the piece (the tip of a land wedge
+ * just off the side), whose vertex an end piece of 8 pixels would leave
+ * inside its diametral circle (a triangle of 4 degrees on the synthetic
+ * L3, seed 2). Three samples miss a tip within about 3/8 of the piece
+ * from the end. */
 static int room_rises(const wm_refine_opts *o, int vertical, int64_t F,
                       int64_t u, int64_t v, double room, int end0, int end1)
 {
@@ -297,7 +299,7 @@ static int room_rises(const wm_refine_opts *o, int vertical, int64_t F,
                                : o->room(o->room_user, q1, F, len);
     const double r3 = vertical ? o->room(o->room_user, F, q3, len)
                                : o->room(o->room_user, q3, F, len);
-    return end0 && end1 ? room >= r1 && room >= r3
+    return end0 && end1 ? 2 * room >= r1 + r3 /* a tent, its peak anywhere */
            : end0       ? r1 <= room && room <= r3
                         : r3 <= room && room <= r1;
 }
@@ -307,10 +309,11 @@ static int room_rises(const wm_refine_opts *o, int vertical, int64_t F,
  * than GRADE_OUTER, or than its room, o->room at that midpoint (no shore
  * is nearer), and than the end's shortest piece (e->min0, e->min1) at an
  * end of the side edge (unless the room does not rise from the end,
- * room_rises) or GRADE_INNER elsewhere (so a side edge makes at most 16 pieces
- * per pixel, only where the shore runs that close to it, and one query per
- * piece; each query reads the edges near the point, see wm_scene_depth; the
- * recursion is as deep as log2 of the side in pixels). A piece no longer
+ * room_rises) or GRADE_INNER elsewhere (so a side edge makes at most 16
+ * pieces per pixel, only where the shore runs that close to it, and one
+ * room query per piece, three at an end, none over GRADE_OUTER; each query
+ * reads the edges near the point, see wm_scene_depth; the recursion is as
+ * deep as log2 of the side in pixels). A piece no longer
  * than its room has its diametral circle within half the room of its
  * midpoint, clear of the inputs' shore by half the room. Everything here
  * is a function of global positions and of the water along the side
@@ -929,8 +932,6 @@ static int circumcentre(const refiner *r, size_t t, wm_pt *c)
     return 1;
 }
 
-/* Marks ring position k's edge to be split; 0 when it may not be (on the
- * block square, or too short). */
 /* The ends of the ring edge at ring position k. */
 static void ring_edge(const refiner *r, int64_t k, wm_pt *a, wm_pt *b)
 {
@@ -941,6 +942,8 @@ static void ring_edge(const refiner *r, int64_t k, wm_pt *a, wm_pt *b)
     *b = r->P[r->ring.a[r->rstart[q] + (q0 - r->rstart[q] + 1) % len]];
 }
 
+/* Marks ring position k's edge to be split; 0 when it may not be (on the
+ * block square, or too short). */
 static int want_split(refiner *r, int64_t k)
 {
     wm_pt a, b;

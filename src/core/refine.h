@@ -94,20 +94,19 @@ extern "C"
      * max_edge, at the global lattice multiples of max_edge along the side;
      * with min_angle and o->room, each piece is halved (at its global
      * midpoint, rounded down) while it is longer than 256 pixels, or than
-     * its room at that
-     * midpoint and than 8 pixels at an end of the side edge (32 times
-     * o->simplify when that is less, down to a pixel; half the land
-     * gap to the next water along the side where that is less, down to
-     * 1/16 pixel: o->ends; at a block corner, the room at the corner where
-     * that is less, down to 1/16 pixel; and an end piece anyway while its
-     * room does not rise from the end to its midpoint), 1/16 pixel
-     * elsewhere: no point of the
-     * inputs' shore then lies within half the room of its diametral circle, so
-     * refinement next to the side seldom needs to split it (the extracted shore
-     * lies within about a pixel and SIMPLIFY of the inputs'); then, while a
-     * piece is more than four times as long as a neighbour (or, at a block
-     * corner, than 16 pixels: four times 4 pixels assumed beyond it, or the
-     * room at the corner where that is less), it is halved too. Rounds of batch
+     * its room at that midpoint and than 8 pixels at an end of the side
+     * edge (32 times o->simplify when that is less, down to a pixel; half
+     * the land gap to the next water along the side where that is less,
+     * down to 1/16 pixel: o->ends; at a block corner, the room at the
+     * corner where that is less, down to 1/16 pixel; and no end limit
+     * where the room does not rise from the end to the midpoint) or 1/16
+     * pixel elsewhere: no point of the inputs' shore then lies within half
+     * the room of its diametral circle, so refinement next to the side
+     * seldom needs to split it (the extracted shore lies within about a
+     * pixel and SIMPLIFY of the inputs'); then, while a piece is more than
+     * four times as long as a neighbour (or, at a block corner, than 16
+     * pixels: four times 4 pixels assumed beyond it, or the room at the
+     * corner where that is less), it is halved too. Rounds of batch
      * insertion (into the triangulation kept from the round before:
      * wm_cdt_insert, wm_cdt_split) repeat until nothing is bad or a round
      * changes nothing; bounds on rounds and points stop a run that does not

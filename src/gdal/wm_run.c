@@ -599,8 +599,9 @@ void WMPrintStats(const WMScene *s, const WMRunStats *st)
         printf("refinement: %lu points added; %lu triangles below MIN_ANGLE "
                "at input angles (between two ring edges); %lu others below "
                "MIN_ANGLE or over MAX_EDGE (near input angles below 60 "
-               "degrees, or not converged), %lu of them below MIN_ANGLE at a "
-               "block side (whose edges refinement may not split)\n",
+               "degrees, or not converged), %lu of them below MIN_ANGLE "
+               "touching a block side (whose edges refinement may not "
+               "split)\n",
                (unsigned long)st->steiner, (unsigned long)st->small_input,
                (unsigned long)st->left, (unsigned long)st->at_side);
     const size_t *ws = s->width_source;
