@@ -279,6 +279,14 @@ typedef struct
     int64_t e0, e1, min0, min1;
 } side_span;
 
+/* The room (o->room) at position X along the side at F, capped. */
+static double room_at(const wm_refine_opts *o, int vertical, int64_t F,
+                      int64_t X, double cap)
+{
+    return vertical ? o->room(o->room_user, F, X, cap)
+                    : o->room(o->room_user, X, F, cap);
+}
+
 /* Whether the room along piece (u, v) of a side edge rises from the end(s)
  * of the edge it touches (end0: e0 = u, end1: e1 = v) to its midpoint,
  * where it is `room`: read at its quarter points (capped at its length).
@@ -295,10 +303,8 @@ static int room_rises(const wm_refine_opts *o, int vertical, int64_t F,
     const double len = (double)(v - u);
     const int64_t q1 = wm_floordiv(3 * u + v, 4),
                   q3 = wm_floordiv(u + 3 * v, 4);
-    const double r1 = vertical ? o->room(o->room_user, F, q1, len)
-                               : o->room(o->room_user, q1, F, len);
-    const double r3 = vertical ? o->room(o->room_user, F, q3, len)
-                               : o->room(o->room_user, q3, F, len);
+    const double r1 = room_at(o, vertical, F, q1, len);
+    const double r3 = room_at(o, vertical, F, q3, len);
     return end0 && end1 ? 2 * room >= r1 + r3 /* a tent, its peak anywhere */
            : end0       ? r1 <= room && room <= r3
                         : r3 <= room && room <= r1;
@@ -330,8 +336,7 @@ static int grade_side(const wm_refine_opts *o, int vertical, int64_t F,
     if (v - u <= GRADE_OUTER)
     {
         const double len = (double)(v - u);
-        const double room = vertical ? o->room(o->room_user, F, m, len)
-                                     : o->room(o->room_user, m, F, len);
+        const double room = room_at(o, vertical, F, m, len);
         if (len <= room || (least < INT64_MAX && v - u <= least &&
                             room_rises(o, vertical, F, u, v, room,
                                        at0 < INT64_MAX, at1 < INT64_MAX)))
@@ -431,8 +436,7 @@ static int64_t end_min(int64_t most, int64_t gap)
 static int64_t corner_min(const wm_refine_opts *o, int vertical, int64_t F,
                           int64_t C, int64_t most)
 {
-    const double room = vertical ? o->room(o->room_user, F, C, (double)most)
-                                 : o->room(o->room_user, C, F, (double)most);
+    const double room = room_at(o, vertical, F, C, (double)most);
     return room >= (double)most ? most
            : room > GRADE_INNER ? (int64_t)room
                                 : GRADE_INNER;
@@ -878,6 +882,20 @@ static wm_status index_tris(refiner *r)
     return WM_OK;
 }
 
+/* The cosine of the smallest angle of triangle p (larger is sharper), its
+ * vertex *s (opposite the shortest edge), and l[i], the squared length of
+ * the edge opposite vertex i. */
+static double sharpest(const wm_pt p[3], double l[3], int *s)
+{
+    for (int i = 0; i < 3; i++)
+        l[i] = d2(p[(i + 1) % 3], p[(i + 2) % 3]);
+    *s = 0;
+    for (int i = 1; i < 3; i++)
+        *s = l[i] < l[*s] ? i : *s;
+    const double b2 = l[(*s + 1) % 3], c2 = l[(*s + 2) % 3];
+    return (b2 + c2 - l[*s]) / (2 * sqrt(b2 * c2));
+}
+
 /* Triangle t's badness: 0 fine, else LONG (an edge over max_edge) and/or
  * SHARP (an angle below min_angle, not an input angle); *input set when
  * its smallest angle lies between two ring edges. */
@@ -887,15 +905,10 @@ static int bad(const refiner *r, size_t t, int *input)
 {
     const uint32_t *v = r->tris + 3 * t;
     const wm_pt p[3] = {r->P[v[0]], r->P[v[1]], r->P[v[2]]};
-    double l[3]; /* l[i]: squared length of the edge opposite vertex i */
-    for (int i = 0; i < 3; i++)
-        l[i] = d2(p[(i + 1) % 3], p[(i + 2) % 3]);
+    double l[3];
+    int s;
+    const double cosa = sharpest(p, l, &s);
     *input = 0;
-    int s = 0; /* the smallest angle is opposite the shortest edge */
-    for (int i = 1; i < 3; i++)
-        s = l[i] < l[s] ? i : s;
-    const double b2 = l[(s + 1) % 3], c2 = l[(s + 2) % 3];
-    const double cosa = (b2 + c2 - l[s]) / (2 * sqrt(b2 * c2));
     int is_bad = l[0] > r->max2 || l[1] > r->max2 || l[2] > r->max2 ? LONG : 0;
     if (cosa > r->cos_min)
     {
@@ -1092,17 +1105,6 @@ static int add_steiner(refiner *r, size_t t, size_t hold, wm_pt c)
     return 1;
 }
 
-/* Smallest angle (its cosine, larger is sharper) of triangle p q s. */
-static double cos_sharpest(wm_pt p, wm_pt q, wm_pt s)
-{
-    const double l[3] = {d2(q, s), d2(p, s), d2(p, q)};
-    int k = 0;
-    for (int i = 1; i < 3; i++)
-        k = l[i] < l[k] ? i : k;
-    const double b2 = l[(k + 1) % 3], c2 = l[(k + 2) % 3];
-    return (b2 + c2 - l[k]) / (2 * sqrt(b2 * c2));
-}
-
 /* Whether point c, with ring edge pos (on the block square, kept) as its
  * base, would make a sharper triangle than t. */
 static int kept_worse(const refiner *r, size_t t, int64_t pos, wm_pt c)
@@ -1112,8 +1114,11 @@ static int kept_worse(const refiner *r, size_t t, int64_t pos, wm_pt c)
     if (!on_square(r, a, b))
         return 0;
     const uint32_t *v = r->tris + 3 * t;
-    return cos_sharpest(a, b, c) >
-           cos_sharpest(r->P[v[0]], r->P[v[1]], r->P[v[2]]);
+    const wm_pt now[3] = {r->P[v[0]], r->P[v[1]], r->P[v[2]]};
+    const wm_pt then[3] = {a, b, c};
+    double l[3];
+    int s;
+    return sharpest(then, l, &s) > sharpest(now, l, &s);
 }
 
 /* What bad triangle t does this round: splits a ring edge or adds its
