@@ -196,26 +196,60 @@ static int side_points(const wm_rings *r, const wm_refine_opts *o, int side,
 }
 
 /* Refines ra (the block at the origin, square side S) and rb (the block
- * across its side x = S) with MIN_ANGLE 20, SIMPLIFY of a pixel and the
- * room of sh: the Steiner points on the shared side, from ra, into ya
- * (ascending, *na of them, at most 510; -1 on failure), and whether rb's
- * differ. */
-static int shared_side(const wm_rings *ra, const wm_rings *rb, int S,
-                       const shores *sh, int32_t *ya, int *na,
-                       wm_refine_stats *sa)
+ * across its side x = S) with MIN_ANGLE 20, SIMPLIFY of a pixel, the room
+ * of sh and the blocks' water along their squares ea and eb (NULL: none):
+ * the Steiner points on the shared side, from ra, into ya (ascending, *na
+ * of them, at most 510; -1 on failure), and whether rb's differ. */
+static int shared_side_of(const wm_rings *ra, const wm_rings *rb, int S,
+                          const shores *sh, const wm_side_ends *ea,
+                          const wm_side_ends *eb, int32_t *ya, int *na,
+                          wm_refine_stats *sa, wm_refine_stats *sb)
 {
-    const wm_refine_opts oa = {20,         0,    S,   0, 0, room_of_shores,
-                               (void *)sh, NULL, WM_Q};
-    const wm_refine_opts ob = {20,         0,    S,   S, 0, room_of_shores,
-                               (void *)sh, NULL, WM_Q};
+    const wm_refine_opts oa = {20,         0,  S,   0, 0, room_of_shores,
+                               (void *)sh, ea, WM_Q};
+    const wm_refine_opts ob = {20,         0,  S,   S, 0, room_of_shores,
+                               (void *)sh, eb, WM_Q};
     int32_t yb[512];
-    wm_refine_stats sb = {0, 0, 0, 0};
     *na = side_points(ra, &oa, S, ya, 510, sa);
-    const int nb = side_points(rb, &ob, 0, yb, 510, &sb);
+    const int nb = side_points(rb, &ob, 0, yb, 510, sb);
     int differ = *na != nb;
     for (int i = 0; !differ && i < *na; i++)
         differ = ya[i] != yb[i];
     return differ;
+}
+
+/* shared_side_of() without the water along the squares. */
+static int shared_side(const wm_rings *ra, const wm_rings *rb, int S,
+                       const shores *sh, int32_t *ya, int *na,
+                       wm_refine_stats *sa)
+{
+    wm_refine_stats sb = {0, 0, 0, 0};
+    return shared_side_of(ra, rb, S, sh, NULL, NULL, ya, na, sa, &sb);
+}
+
+/* shared_side_of() without and with the blocks' water along their squares
+ * (wm_side_ends of ra and rb): the side points with it (ya, *na), whether
+ * the blocks cut the side differently with it (*differ), and the sharp
+ * triangles both leave without (left[0]) and with it (left[1]). 0 on
+ * failure. */
+static int with_side_ends(const wm_rings *ra, const wm_rings *rb, int S,
+                          const shores *sh, int32_t *ya, int *na, int *differ,
+                          size_t left[2])
+{
+    wm_side_ends ea, eb;
+    memset(&eb, 0, sizeof eb);
+    int ok = wm_side_ends_build(&ea, ra, S) && wm_side_ends_build(&eb, rb, S);
+    for (int with = 0; ok && with < 2; with++)
+    {
+        wm_refine_stats sa = {0, 0, 0, 0}, sb = {0, 0, 0, 0};
+        *differ = shared_side_of(ra, rb, S, sh, with ? &ea : NULL,
+                                 with ? &eb : NULL, ya, na, &sa, &sb);
+        ok = *na >= 0 && *na < 510;
+        left[with] = sa.left + sb.left;
+    }
+    wm_side_ends_free(&ea);
+    wm_side_ends_free(&eb);
+    return ok;
 }
 
 int main(void)
@@ -473,40 +507,19 @@ int main(void)
                             {S - 20000, 35000, S + 20000, 35000},
                             {S, 20000, S - 6, 20008},
                             {S, 20000, S + 40, 20008}}};
-        wm_side_ends ea, eb;
-        const int built =
-            wm_side_ends_build(&ea, &ra, S) && wm_side_ends_build(&eb, &rb, S);
+        int32_t ya[512], near = 0;
+        int na = 0, differ = 0;
         size_t left[2] = {0, 0};
-        int32_t near = 0, differ = 0, fail = !built;
-        for (int with = 0; built && with < 2; with++)
+        const int fail =
+            !with_side_ends(&ra, &rb, S, &sh, ya, &na, &differ, left);
+        /* the side points nearest the notch, below and above it */
+        int32_t below = 0, above = 35000;
+        for (int i = 0; i < na; i++)
         {
-            const wm_refine_opts oa = {
-                20,  0, S, 0, 0, room_of_shores, (void *)&sh, with ? &ea : NULL,
-                WM_Q};
-            const wm_refine_opts ob = {
-                20,  0, S, S, 0, room_of_shores, (void *)&sh, with ? &eb : NULL,
-                WM_Q};
-            int32_t ya[512], yb[512];
-            wm_refine_stats sa = {0, 0, 0, 0}, sb = {0, 0, 0, 0};
-            const int na = side_points(&ra, &oa, S, ya, 512, &sa);
-            const int nb = side_points(&rb, &ob, 0, yb, 512, &sb);
-            fail += na < 0 || nb < 0 || na >= 512;
-            left[with] = sa.left + sb.left;
-            if (!with || fail)
-                continue;
-            differ = na != nb;
-            for (int i = 0; !differ && i < na; i++)
-                differ = ya[i] != yb[i];
-            /* the side points nearest the notch, below and above it */
-            int32_t below = 0, above = 35000;
-            for (int i = 0; i < na; i++)
-            {
-                below = ya[i] < 20000 && ya[i] > below ? ya[i] : below;
-                above = ya[i] > 20017 && ya[i] < above ? ya[i] : above;
-            }
-            near =
-                20000 - below > above - 20017 ? 20000 - below : above - 20017;
+            below = ya[i] < 20000 && ya[i] > below ? ya[i] : below;
+            above = ya[i] > 20017 && ya[i] < above ? ya[i] : above;
         }
+        near = 20000 - below > above - 20017 ? 20000 - below : above - 20017;
         TAP_EQ(fail, 0, "a notch at a side: refined in both blocks");
         TAP_EQ(differ, 0, "a notch at a side: both blocks cut it alike");
         TAP_OK(near > 0 && near <= 16,
@@ -516,8 +529,6 @@ int main(void)
                "a notch at a side: %zu sharp triangles left, %zu without "
                "the water along the side",
                left[1], left[0]);
-        wm_side_ends_free(&ea);
-        wm_side_ends_free(&eb);
         wm_rings_free(&ra);
         wm_rings_free(&rb);
     }
@@ -628,6 +639,44 @@ int main(void)
                na > 0 ? (int)(S - ya[na - 1]) : -1);
         TAP_EQ(differ, 0, "a shore past a corner: both blocks cut it alike");
         TAP_EQ(sa.left, 0, "a shore past a corner: no sharp triangle left");
+        wm_rings_free(&ra);
+        wm_rings_free(&rb);
+    }
+    /* a shore cutting the block corner (S, S) off 60 units below it on the
+     * side x = S and 116 units left of it on the side y = S: the water
+     * along x = S ends 60 units from the corner, with land up to it. With
+     * the blocks' water along the side (wm_side_ends, the same in both),
+     * the piece at that end is graded down to twice that (the corner is
+     * the nearest feature of the block square, as the next water is for a
+     * notch), both blocks cut the side alike and no triangle is left
+     * sharp; without, the end piece stays 8 pixels long beside the shore's
+     * edge of 131 units (2 sharp triangles; 7 in one block of the
+     * synthetic L1, seed 7, at 2 m pixels and 512 m blocks) */
+    {
+        const int S = 51200;
+        const int a[] = {S - 20000, S - 20000, S, S - 20000, S,
+                         S - 60,    S - 116,   S, S - 20000, S};
+        const int b[] = {0,     S - 20000, 20000, S - 20000,
+                         20000, S - 10405, 0,     S - 60};
+        wm_rings ra = ring_of(a, 5), rb = ring_of(b, 4);
+        const shores sh = {2,
+                           {{S + 20000, S - 10405, S - 2049, S + 1000},
+                            {S - 20000, S - 20000, S + 20000, S - 20000}}};
+        int32_t ya[512];
+        int na = 0, differ = 0;
+        size_t left[2] = {0, 0};
+        const int fail =
+            !with_side_ends(&ra, &rb, S, &sh, ya, &na, &differ, left) ||
+            na == 0;
+        const int32_t end = fail ? 0 : S - 60 - ya[na - 1];
+        TAP_EQ(fail, 0, "a corner cut off: refined in both blocks");
+        TAP_EQ(differ, 0, "a corner cut off: both blocks cut it alike");
+        TAP_OK(end > 0 && end <= 120,
+               "a corner cut off: the end piece %d units long", (int)end);
+        TAP_OK(left[1] == 0 && left[0] > 0,
+               "a corner cut off: %zu sharp triangles left, %zu without the "
+               "water along the side",
+               left[1], left[0]);
         wm_rings_free(&ra);
         wm_rings_free(&rb);
     }

@@ -46,7 +46,8 @@ extern "C"
         void *room_user;
         /** with room: the block's water along its square (every polygon's),
          *  which bounds the pieces at a side edge's end by the land gap to
-         *  the next water along the side; NULL: no such bound */
+         *  the next water along the side, or to the block corner; NULL: no
+         *  such bound */
         const wm_side_ends *ends;
         /** with room: SIMPLIFY, lattice units (below a quarter pixel the
          *  pieces at a side edge's ends are graded shorter) */
@@ -96,8 +97,9 @@ extern "C"
      * midpoint, rounded down) while it is longer than 256 pixels, or than
      * its room at that midpoint and than 8 pixels at an end of the side
      * edge (32 times o->simplify when that is less, down to a pixel; half
-     * the land gap to the next water along the side where that is less,
-     * down to 1/16 pixel: o->ends; at a block corner, the room at the
+     * the land gap to the next water along the side, or twice the land to
+     * a block corner with no water beyond, where that is less, down to
+     * 1/16 pixel: o->ends; at a block corner, the room at the
      * corner where that is less, down to 1/16 pixel; and no end limit
      * where the room does not rise from the end to the midpoint) or 1/16
      * pixel elsewhere: no point of the inputs' shore then lies within half
