@@ -276,6 +276,26 @@ def simple_options(simple_scene):
 
 
 @pytest.fixture(scope='session')
+def opencl_exact(simple_options):
+    """Whether DEVICE=OPENCL runs the double-precision kernel here (the
+    device has doubles: its values, and so the output, are the C path's
+    bit for bit), as the driver's debug line names the device; False where
+    no OpenCL device is expected."""
+    if not OPENCL_EXPECTED:
+        return False
+    old = gdal.GetConfigOption('CPL_DEBUG')
+    gdal.SetConfigOption('CPL_DEBUG', 'ON')
+    try:
+        ds, cap = open_watermesh(dict(simple_options, DEVICE='OPENCL'))
+        ds = None
+    finally:
+        gdal.SetConfigOption('CPL_DEBUG', old)
+    lines = [m for c, _, m in cap.records if c == gdal.CE_Debug and 'DEVICE=OPENCL' in m]
+    assert lines, cap.text
+    return 'double precision' in lines[0]
+
+
+@pytest.fixture(scope='session')
 def random_scene(scene_dir):
     """Factory: random_scene(seed, **kwargs) -> GeoPackage path (cached)."""
     cache = {}

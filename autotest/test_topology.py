@@ -296,8 +296,12 @@ def test_threads_identical(scene, pair):
 
 
 if OPENCL_EXPECTED:
-    def test_opencl_matches_c_path(scene):
+    def test_opencl_matches_c_path(scene, opencl_exact):
+        """Identical with the double kernel (a device with doubles); the
+        same features, area within OPENCL_AREA_REL, with the float one."""
         a, b = scene.run('exact'), scene.run('exact_cl')
+        if opencl_exact:
+            assert a.signature() == b.signature(), scene.describe
         assert len(a.water) == len(b.water) and len(a.mesh) == len(b.mesh), scene.describe
         ca, cb = oracle.total_area(a.water), oracle.total_area(b.water)
         assert abs(ca - cb) <= OPENCL_AREA_REL * ca, (scene.describe, ca, cb)

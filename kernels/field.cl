@@ -10,7 +10,9 @@
  * a group being one lake polygon's edges in reach of the tile, its sign
  * the polygon's even-odd parity at the sample (a host-computed bit mask).
  *
- * Precision without doubles (consumer GPUs lack them). The host gives
+ * This kernel runs where the device has no doubles (consumer GPUs);
+ * wm_field_tiles_f64 below, the C path's double operations bit for bit,
+ * where it has (cl_khr_fp64). Precision without doubles: the host gives
  * every coordinate as a lattice integer relative to the tile's sample
  * (0, 0), |x| < 2^30, so every difference, dot and cross product is exact
  * in 64-bit integers. Floating point enters only in quotients whose
@@ -111,3 +113,98 @@ __kernel void wm_field_tiles(const uint ntiles, const float bandl,
     v = v < -bandl ? -bandl : v;
     val[(size_t)t * (WM_TS1 * WM_TS1) + i] = v * (1.0f / WM_Q);
 }
+
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+
+/* wm_field_tiles_f64: the same field in double precision, operation for
+ * operation the C path's (field.c: seg_d2, river_min, edge_min2, lake_min,
+ * clamp_out), so every value is bit-identical to it (IEEE double: +, -, *,
+ * / and sqrt correctly rounded, no contraction). Every sample is
+ * evaluated against every item of its tile; the C path's narrow band and
+ * row spans skip only terms that cannot change a clamped value. Devices
+ * without cl_khr_fp64 run wm_field_tiles above. */
+
+/* Squared distance from p to segment [0, ab] (p relative to a); inv =
+ * 1 / |ab|^2, or 0 for a point (field.c's seg_d2). */
+static double seg_d2(const double px, const double py, const double abx,
+                     const double aby, const double inv)
+{
+    double t = (px * abx + py * aby) * inv;
+    t = t < 0.0 ? 0.0 : t;
+    t = t > 1.0 ? 1.0 : t;
+    const double dx = px - t * abx, dy = py - t * aby;
+    return dx * dx + dy * dy;
+}
+
+/* Segment g (relative to its tile) seen from the tile's sample (q, j), as
+ * field.c forms it: p - a, b - a, |b - a|^2 and its inverse (0 for a
+ * point). */
+typedef struct
+{
+    double px, py, abx, aby, len2, inv;
+} seg_view;
+
+static seg_view view_of(const int4 g, const int q, const int j)
+{
+    seg_view s;
+    s.abx = (double)((long)g.z - g.x);
+    s.aby = (double)((long)g.w - g.y);
+    s.len2 = s.abx * s.abx + s.aby * s.aby;
+    s.inv = s.len2 > 0.0 ? 1.0 / s.len2 : 0.0;
+    s.px = (double)(-(long)g.x) + (double)q * WM_Q;
+    s.py = (double)(-(long)g.y) + (double)j * WM_Q;
+    return s;
+}
+
+/* Rivers: seg_xy as above, seg_r their radii (lattice units); lakes:
+ * edge_xy. */
+__kernel void wm_field_tiles_f64(const uint ntiles, const double bandl,
+                                 __global const uint *seg_start,
+                                 __global const int4 *seg_xy,
+                                 __global const double *seg_r,
+                                 __global const uint *grp_start,
+                                 __global const uint *edge_start,
+                                 __global const int4 *edge_xy,
+                                 __global const ulong *mask,
+                                 __global float *val)
+{
+    const uint i = (uint)get_global_id(0);
+    const uint t = (uint)get_global_id(1);
+    if (i >= WM_TS1 * WM_TS1 || t >= ntiles)
+        return;
+    const int q = (int)(i % WM_TS1), j = (int)(i / WM_TS1);
+    double v = bandl;
+
+    for (uint k = seg_start[t]; k < seg_start[t + 1]; k++)
+    {
+        const seg_view g = view_of(seg_xy[k], q, j);
+        const double d =
+            sqrt(seg_d2(g.px, g.py, g.abx, g.aby, g.inv)) - seg_r[k];
+        v = d < v ? d : v;
+    }
+
+    for (uint g = grp_start[t]; g < grp_start[t + 1]; g++)
+    {
+        double du2 = INFINITY;
+        for (uint e = edge_start[g]; e < edge_start[g + 1]; e++)
+        {
+            const seg_view c = view_of(edge_xy[e], q, j);
+            /* a sample on the edge is exactly 0 away (field.c) */
+            const double dot = c.px * c.abx + c.py * c.aby;
+            const double d2 =
+                c.px * c.aby == c.py * c.abx && dot >= 0.0 && dot <= c.len2
+                    ? 0.0
+                    : seg_d2(c.px, c.py, c.abx, c.aby, c.inv);
+            du2 = d2 < du2 ? d2 : du2;
+        }
+        const double sign =
+            1.0 - 2.0 * (double)((mask[(size_t)g * WM_TS1 + (size_t)j] >> q) &
+                                 1);
+        const double d = sign * sqrt(du2);
+        v = d < v ? d : v;
+    }
+    v = v < -bandl ? -bandl : v;
+    val[(size_t)t * (WM_TS1 * WM_TS1) + i] = (float)(v / WM_Q);
+}
+#endif

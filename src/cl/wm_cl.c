@@ -45,6 +45,7 @@ struct wm_cl
     cl_context context;
     cl_program program;
     int use_local; /* the kernel runs with LOCAL work-items per group */
+    int f64;       /* runs wm_field_tiles_f64 (the device has doubles) */
     char desc[256];
 };
 
@@ -312,7 +313,12 @@ wm_status wm_cl_open(const char *name, const char *kernel_dir, wm_cl **out,
                      cl->desc, wm_cl_strerror(err), (int)err, log ? log : "");
         goto fail;
     }
-    cl_kernel k = clCreateKernel(cl->program, "wm_field_tiles", &err);
+    /* the double kernel, bit-identical to the C path, where the device
+     * compiled it (cl_khr_fp64); else the single-precision one */
+    cl_kernel k = clCreateKernel(cl->program, "wm_field_tiles_f64", &err);
+    cl->f64 = err == CL_SUCCESS;
+    if (!cl->f64)
+        k = clCreateKernel(cl->program, "wm_field_tiles", &err);
     if (err != CL_SUCCESS)
     {
         st = cl_fail(ctx, "clCreateKernel(wm_field_tiles)", err);
@@ -346,6 +352,16 @@ void wm_cl_close(wm_cl *cl)
 const char *wm_cl_describe(const wm_cl *cl)
 {
     return cl->desc;
+}
+
+int wm_cl_exact(const wm_cl *cl)
+{
+    return cl->f64;
+}
+
+void wm_cl_use_float(wm_cl *cl)
+{
+    cl->f64 = 0;
 }
 
 /* max(|bx - ax|, |by - ay|) */
@@ -384,9 +400,10 @@ typedef struct
 {
     cl_uint *seg_start, *grp_start, *edge_start;
     cl_int4 *seg_xy, *edge_xy;
-    cl_long2 *seg_k;
-    cl_float4 *seg_f;
+    cl_long2 *seg_k;  /* single precision: r |ab| and r^2 split */
+    cl_float4 *seg_f; /* (wm_field_tiles) */
     cl_float *edge_len;
+    cl_double *seg_r; /* double: the radii (wm_field_tiles_f64) */
 } packed;
 
 static void packed_free(packed *p)
@@ -399,6 +416,7 @@ static void packed_free(packed *p)
     free(p->seg_k);
     free(p->seg_f);
     free(p->edge_len);
+    free(p->seg_r);
 }
 
 /* Coordinates of [a, b] relative to (X, Y); 0 when out of range. */
@@ -423,7 +441,10 @@ static void split(double x, cl_long *i, cl_float *f)
     *f = (cl_float)(x - fl);
 }
 
-static wm_status pack(const wm_field_batch *b, packed *p, const wm_ctx *ctx)
+/* Packs batch b for the kernel: coordinates relative to each tile, and
+ * the radii (f64) or single precision's split lengths. */
+static wm_status pack(const wm_field_batch *b, int f64, packed *p,
+                      const wm_ctx *ctx)
 {
     const size_t nt = b->ntiles, ns = b->seg_start[nt],
                  ne = b->edge_start[b->ngroups];
@@ -433,12 +454,18 @@ static wm_status pack(const wm_field_batch *b, packed *p, const wm_ctx *ctx)
     p->grp_start = malloc((nt + 1) * sizeof *p->grp_start);
     p->edge_start = malloc((b->ngroups + 1) * sizeof *p->edge_start);
     p->seg_xy = malloc((ns + 1) * sizeof *p->seg_xy);
-    p->seg_k = malloc((ns + 1) * sizeof *p->seg_k);
-    p->seg_f = malloc((ns + 1) * sizeof *p->seg_f);
     p->edge_xy = malloc((ne + 1) * sizeof *p->edge_xy);
-    p->edge_len = malloc((ne + 1) * sizeof *p->edge_len);
+    if (f64)
+        p->seg_r = malloc((ns + 1) * sizeof *p->seg_r);
+    else
+    {
+        p->seg_k = malloc((ns + 1) * sizeof *p->seg_k);
+        p->seg_f = malloc((ns + 1) * sizeof *p->seg_f);
+        p->edge_len = malloc((ne + 1) * sizeof *p->edge_len);
+    }
     if (!p->seg_start || !p->grp_start || !p->edge_start || !p->seg_xy ||
-        !p->seg_k || !p->seg_f || !p->edge_xy || !p->edge_len)
+        !p->edge_xy ||
+        (f64 ? !p->seg_r : !p->seg_k || !p->seg_f || !p->edge_len))
         return wm_fail(ctx, WM_ERR_NOMEM, "out of memory packing a batch");
     for (size_t k = 0; k <= nt; k++)
     {
@@ -455,6 +482,11 @@ static wm_status pack(const wm_field_batch *b, packed *p, const wm_ctx *ctx)
             const wm_river_seg *g = &b->s->segs[b->seg[i]];
             if (!rel(g->ax, g->ay, g->bx, g->by, X, Y, &p->seg_xy[i]))
                 goto range;
+            if (f64)
+            {
+                p->seg_r[i] = g->r;
+                continue;
+            }
             const double dx = (double)(g->bx - g->ax),
                          dy = (double)(g->by - g->ay);
             const double len = sqrt(dx * dx + dy * dy);
@@ -469,6 +501,8 @@ static wm_status pack(const wm_field_batch *b, packed *p, const wm_ctx *ctx)
                 const wm_lake_edge *e = &b->s->edges[b->edge[i]];
                 if (!rel(e->ax, e->ay, e->bx, e->by, X, Y, &p->edge_xy[i]))
                     goto range;
+                if (f64)
+                    continue;
                 const double dx = (double)(e->bx - e->ax),
                              dy = (double)(e->by - e->ay);
                 p->edge_len[i] = (cl_float)sqrt(dx * dx + dy * dy);
@@ -481,72 +515,96 @@ range:
                    "coordinate range (2^30 lattice units from a tile)");
 }
 
+/* The kernel's buffer arguments, in order: wm_field_tiles_f64's or
+ * wm_field_tiles's; the last is the output. */
+#define MAXBUF 10
+typedef struct
+{
+    const void *host; /* NULL: the output */
+    size_t size;
+} kbuf;
+
+static int kernel_buffers(const wm_field_batch *b, int f64, const packed *p,
+                          kbuf *in)
+{
+    static const cl_ulong zero = 0; /* an empty group list needs a buffer */
+    const size_t nt = b->ntiles, ng = b->ngroups, ns = b->seg_start[nt],
+                 ne = b->edge_start[ng];
+    const kbuf mask = {ng ? (const void *)b->mask : &zero,
+                       (ng ? ng * WM_TS1 : 1) * sizeof(cl_ulong)};
+    const kbuf val = {NULL, nt * WM_TS1 * WM_TS1 * sizeof(cl_float)};
+    int n = 0;
+    in[n++] = (kbuf){p->seg_start, (nt + 1) * sizeof *p->seg_start};
+    in[n++] = (kbuf){p->seg_xy, (ns + 1) * sizeof *p->seg_xy};
+    if (f64)
+        in[n++] = (kbuf){p->seg_r, (ns + 1) * sizeof *p->seg_r};
+    else
+    {
+        in[n++] = (kbuf){p->seg_k, (ns + 1) * sizeof *p->seg_k};
+        in[n++] = (kbuf){p->seg_f, (ns + 1) * sizeof *p->seg_f};
+    }
+    in[n++] = (kbuf){p->grp_start, (nt + 1) * sizeof *p->grp_start};
+    in[n++] = (kbuf){p->edge_start, (ng + 1) * sizeof *p->edge_start};
+    in[n++] = (kbuf){p->edge_xy, (ne + 1) * sizeof *p->edge_xy};
+    if (!f64)
+        in[n++] = (kbuf){p->edge_len, (ne + 1) * sizeof *p->edge_len};
+    in[n++] = mask;
+    in[n++] = val;
+    return n;
+}
+
 wm_status wm_cl_eval(void *user, const wm_field_batch *b, const wm_ctx *ctx)
 {
     wm_cl *cl = user;
+    const int f64 = cl->f64;
     packed p;
     wm_status st;
     cl_int err = CL_SUCCESS;
     const char *call = "";
     cl_command_queue q = NULL;
     cl_kernel k = NULL;
-    cl_mem buf[10];
+    cl_mem buf[MAXBUF];
+    kbuf in[MAXBUF];
     memset(&p, 0, sizeof p);
     memset(buf, 0, sizeof buf);
     if (b->ntiles == 0)
         return WM_OK;
-    st = pack(b, &p, ctx);
+    st = pack(b, f64, &p, ctx);
     if (st != WM_OK)
         goto cleanup;
-    const size_t nt = b->ntiles, ng = b->ngroups, ns = b->seg_start[nt],
-                 ne = b->edge_start[ng];
-    const struct
-    {
-        const void *host;
-        size_t size;
-    } in[10] = {
-        {p.seg_start, (nt + 1) * sizeof *p.seg_start},
-        {p.seg_xy, (ns + 1) * sizeof *p.seg_xy},
-        {p.seg_k, (ns + 1) * sizeof *p.seg_k},
-        {p.seg_f, (ns + 1) * sizeof *p.seg_f},
-        {p.grp_start, (nt + 1) * sizeof *p.grp_start},
-        {p.edge_start, (ng + 1) * sizeof *p.edge_start},
-        {p.edge_xy, (ne + 1) * sizeof *p.edge_xy},
-        {p.edge_len, (ne + 1) * sizeof *p.edge_len},
-        {b->mask, (ng ? ng * WM_TS1 : 1) * sizeof(cl_ulong)},
-        {NULL, nt * WM_TS1 * WM_TS1 * sizeof(cl_float)},
-    };
-    /* an empty group list still needs a valid buffer */
-    static const cl_ulong zero = 0;
+    const size_t nt = b->ntiles, ns = b->seg_start[nt],
+                 ne = b->edge_start[b->ngroups];
+    const int nb = kernel_buffers(b, f64, &p, in);
 
     call = "clCreateCommandQueue";
     q = clCreateCommandQueue(cl->context, cl->device, 0, &err);
     if (err != CL_SUCCESS)
         goto clerr;
     call = "clCreateKernel";
-    k = clCreateKernel(cl->program, "wm_field_tiles", &err);
+    k = clCreateKernel(cl->program,
+                       f64 ? "wm_field_tiles_f64" : "wm_field_tiles", &err);
     if (err != CL_SUCCESS)
         goto clerr;
     call = "clCreateBuffer";
-    for (int i = 0; i < 10; i++)
+    for (int i = 0; i < nb; i++)
     {
-        const void *host = in[i].host;
-        if (i == 8 && ng == 0)
-            host = &zero;
-        buf[i] = clCreateBuffer(cl->context,
-                                host ? CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR
-                                     : CL_MEM_WRITE_ONLY,
-                                in[i].size, (void *)host, &err);
+        buf[i] =
+            clCreateBuffer(cl->context,
+                           in[i].host ? CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR
+                                      : CL_MEM_WRITE_ONLY,
+                           in[i].size, (void *)in[i].host, &err);
         if (err != CL_SUCCESS)
             goto clerr;
     }
     const cl_uint ntiles = (cl_uint)nt;
-    const cl_float bandl = (cl_float)((double)b->s->band * WM_Q);
+    const cl_double band64 = (double)b->s->band * WM_Q;
+    const cl_float band32 = (cl_float)band64;
     call = "clSetKernelArg";
     err = clSetKernelArg(k, 0, sizeof ntiles, &ntiles);
     if (err == CL_SUCCESS)
-        err = clSetKernelArg(k, 1, sizeof bandl, &bandl);
-    for (cl_uint i = 0; i < 10 && err == CL_SUCCESS; i++)
+        err = f64 ? clSetKernelArg(k, 1, sizeof band64, &band64)
+                  : clSetKernelArg(k, 1, sizeof band32, &band32);
+    for (cl_uint i = 0; i < (cl_uint)nb && err == CL_SUCCESS; i++)
         err = clSetKernelArg(k, 2 + i, sizeof(cl_mem), &buf[i]);
     if (err != CL_SUCCESS)
         goto clerr;
@@ -561,8 +619,8 @@ wm_status wm_cl_eval(void *user, const wm_field_batch *b, const wm_ctx *ctx)
     if (err != CL_SUCCESS)
         goto clerr;
     call = "clEnqueueReadBuffer";
-    err = clEnqueueReadBuffer(q, buf[9], CL_TRUE, 0, in[9].size, b->val, 0,
-                              NULL, NULL);
+    err = clEnqueueReadBuffer(q, buf[nb - 1], CL_TRUE, 0, in[nb - 1].size,
+                              b->val, 0, NULL, NULL);
     if (err != CL_SUCCESS)
         goto clerr;
     if (b->samples) /* every sample of every tile, against its items */
@@ -573,7 +631,7 @@ wm_status wm_cl_eval(void *user, const wm_field_batch *b, const wm_ctx *ctx)
 clerr:
     st = cl_fail(ctx, call, err);
 cleanup:
-    for (int i = 0; i < 10; i++)
+    for (int i = 0; i < MAXBUF; i++)
         if (buf[i])
             clReleaseMemObject(buf[i]);
     if (k)

@@ -57,6 +57,17 @@ extern "C"
     const char *wm_cl_describe(const wm_cl *cl);
 
     /**
+     * 1 when the device runs the double-precision kernel, whose every
+     * value is bit-identical to the C path's (the device has cl_khr_fp64),
+     * 0 when it runs the single-precision one (within about 1e-6 px of it:
+     * rings may then move by a lattice unit).
+     */
+    int wm_cl_exact(const wm_cl *cl);
+
+    /** Makes cl run the single-precision kernel (for tests). */
+    void wm_cl_use_float(wm_cl *cl);
+
+    /**
      * 1 when every coordinate the kernel will see for this scene stays in
      * its exact integer range (|x| < 2^30 lattice units relative to a tile:
      * segments shorter than about 2^29 units, radii likewise), 0 otherwise.

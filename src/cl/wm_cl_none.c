@@ -45,6 +45,17 @@ const char *wm_cl_describe(const wm_cl *cl)
     return "";
 }
 
+int wm_cl_exact(const wm_cl *cl)
+{
+    (void)cl;
+    return 0;
+}
+
+void wm_cl_use_float(wm_cl *cl)
+{
+    (void)cl;
+}
+
 int wm_cl_fits(const wm_scene *s)
 {
     (void)s;

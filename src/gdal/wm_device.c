@@ -198,7 +198,9 @@ int WMDeviceSelect(WMScene *s)
     }
     d->field.eval = eval_device;
     d->field.user = d;
-    snprintf(d->desc, sizeof d->desc, "OpenCL: %s", wm_cl_describe(d->cl));
+    snprintf(d->desc, sizeof d->desc, "OpenCL: %s, %s", wm_cl_describe(d->cl),
+             wm_cl_exact(d->cl) ? "double precision (the C path's values)"
+                                : "single precision");
     CPLDebug("WATERMESH", "DEVICE=%s: %s",
              kind == WM_DEVICE_AUTO ? "AUTO" : "OPENCL", d->desc);
 done:
