@@ -192,8 +192,8 @@ __kernel void wm_field_tiles_f64(const uint ntiles, const double bandl,
             const seg_view c = view_of(edge_xy[e], q, j);
             /* a sample on the edge is exactly 0 away (field.c) */
             const double dot = c.px * c.abx + c.py * c.aby;
-            const double d2 =
-                c.px * c.aby == c.py * c.abx && dot >= 0.0 && dot <= c.len2
+            const double d2 = c.len2 > 0.0 && c.px * c.aby == c.py * c.abx &&
+                                      dot >= 0.0 && dot <= c.len2
                     ? 0.0
                     : seg_d2(c.px, c.py, c.abx, c.aby, c.inv);
             du2 = d2 < du2 ? d2 : du2;

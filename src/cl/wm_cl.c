@@ -253,6 +253,111 @@ static char *read_source(const char *dir, const wm_ctx *ctx)
     return src;
 }
 
+static wm_status eval_batch(wm_cl *cl, const wm_field_batch *b,
+                            const wm_ctx *ctx);
+
+/* Whether the double kernel gives the C path's bits on a canned batch: a
+ * runtime that fused products into FMAs despite FP_CONTRACT OFF (LLVM
+ * with -ffp-contract=fast) would not. CHECK_TILES tiles, each against
+ * CHECK_SEGS pseudo-random river segments (radii up to 12 px) and a lake
+ * group of CHECK_EDGES edges, its parity 0 or 1 over the whole tile (a
+ * parity constant where no edge is near, as the C path's narrow band
+ * assumes). */
+enum
+{
+    CHECK_TILES = 8,
+    CHECK_SEGS = 16,
+    CHECK_EDGES = 8
+};
+
+static int64_t lcg(uint32_t *x, int64_t range)
+{
+    *x = *x * 1664525u + 1013904223u;
+    return (int64_t)(*x >> 8) % range;
+}
+
+/* A pseudo-random edge with both ends in [0, span)^2. */
+static wm_lake_edge lcg_edge(uint32_t *x, int64_t span)
+{
+    wm_lake_edge e;
+    e.ax = lcg(x, span);
+    e.ay = lcg(x, span);
+    e.bx = lcg(x, span);
+    e.by = lcg(x, span);
+    return e;
+}
+
+static int f64_exact(wm_cl *cl)
+{
+    wm_river_seg segs[CHECK_SEGS];
+    wm_lake_edge edges[CHECK_EDGES];
+    wm_scene s;
+    memset(&s, 0, sizeof s);
+    uint32_t x = 20261128u;
+    const int64_t span = 48 * WM_Q; /* around the tiles */
+    /* half at random; half lines of no width, 28 px along a sample row:
+     * on them the exact value is 0 while the projection's t = i / 28 is
+     * inexact, so any other rounding of p - t (b - a) shows (an FMA leaves
+     * +-1e-13 where the C path's product rounds to p); elsewhere a double's
+     * last bit seldom survives the rounding to float. A kernel built with
+     * contraction on differs at 18 of these 8,712 samples on PoCL. */
+    for (int i = 0; i < CHECK_SEGS; i++)
+    {
+        const wm_lake_edge e = lcg_edge(&x, span);
+        wm_river_seg *g = &segs[i];
+        *g = (wm_river_seg){e.ax, e.ay, e.bx, e.by, 0};
+        g->r = (double)lcg(&x, 12 * WM_Q) + 0.37;
+        if (i % 2)
+            continue;
+        g->ax = g->ax / WM_Q * WM_Q;
+        g->ay = g->ay / WM_Q * WM_Q;
+        g->bx = g->ax + 28 * WM_Q;
+        g->by = g->ay;
+        g->r = 0;
+    }
+    for (int i = 0; i < CHECK_EDGES; i++)
+        edges[i] = lcg_edge(&x, span);
+    s.segs = segs;
+    s.nsegs = CHECK_SEGS;
+    s.edges = edges;
+    s.nedges = CHECK_EDGES;
+    s.band = 2;
+    int64_t org[2 * CHECK_TILES];
+    size_t seg_start[CHECK_TILES + 1], grp_start[CHECK_TILES + 1];
+    size_t edge_start[CHECK_TILES + 1];
+    uint32_t seg[CHECK_TILES * CHECK_SEGS], edge[CHECK_TILES * CHECK_EDGES];
+    uint64_t mask[CHECK_TILES * WM_TS1];
+    for (int t = 0; t <= CHECK_TILES; t++)
+    {
+        seg_start[t] = (size_t)t * CHECK_SEGS;
+        grp_start[t] = (size_t)t; /* one group per tile */
+        edge_start[t] = (size_t)t * CHECK_EDGES;
+        if (t == CHECK_TILES)
+            break;
+        org[2 * t] = (t % 4) * WM_TILE * WM_Q; /* samples on the pixel grid */
+        org[2 * t + 1] = (t / 4) * WM_TILE * WM_Q;
+        for (int i = 0; i < CHECK_SEGS; i++)
+            seg[t * CHECK_SEGS + i] = (uint32_t)i;
+        for (int i = 0; i < CHECK_EDGES; i++)
+            edge[t * CHECK_EDGES + i] = (uint32_t)i;
+        for (int j = 0; j < WM_TS1; j++) /* parity 1 in odd tiles */
+            mask[t * WM_TS1 + j] = t % 2 ? ~UINT64_C(0) : 0;
+    }
+    const size_t nv = (size_t)CHECK_TILES * WM_TS1 * WM_TS1;
+    float *v = malloc(2 * nv * sizeof *v);
+    if (!v)
+        return 0;
+    wm_field_batch b = {&s,        CHECK_TILES, org,        seg_start, seg,
+                        grp_start, CHECK_TILES, edge_start, edge,      mask,
+                        v,         NULL,        NULL};
+    int same = wm_field_eval_c(NULL, &b, NULL) == WM_OK;
+    b.val = v + nv;
+    same = same && eval_batch(cl, &b, NULL) == WM_OK &&
+           memcmp(v, v + nv, nv * sizeof *v) == 0;
+    free(v);
+    return same;
+}
+
 wm_status wm_cl_open(const char *name, const char *kernel_dir, wm_cl **out,
                      const wm_ctx *ctx)
 {
@@ -313,22 +418,33 @@ wm_status wm_cl_open(const char *name, const char *kernel_dir, wm_cl **out,
                      cl->desc, wm_cl_strerror(err), (int)err, log ? log : "");
         goto fail;
     }
-    /* the double kernel, bit-identical to the C path, where the device
-     * compiled it (cl_khr_fp64); else the single-precision one */
-    cl_kernel k = clCreateKernel(cl->program, "wm_field_tiles_f64", &err);
-    cl->f64 = err == CL_SUCCESS;
-    if (!cl->f64)
-        k = clCreateKernel(cl->program, "wm_field_tiles", &err);
-    if (err != CL_SUCCESS)
+    /* both kernels must run with LOCAL work-items per group for it */
+    cl->use_local = 1;
+    for (int f64 = 1; f64 >= 0; f64--)
     {
-        st = cl_fail(ctx, "clCreateKernel(wm_field_tiles)", err);
-        goto fail;
+        cl_kernel k = clCreateKernel(
+            cl->program, f64 ? "wm_field_tiles_f64" : "wm_field_tiles", &err);
+        if (f64 && err == CL_INVALID_KERNEL_NAME) /* no cl_khr_fp64 */
+            continue;
+        if (err != CL_SUCCESS)
+        {
+            st = cl_fail(ctx,
+                         f64 ? "clCreateKernel(wm_field_tiles_f64)"
+                             : "clCreateKernel(wm_field_tiles)",
+                         err);
+            goto fail;
+        }
+        size_t wg = 0;
+        clGetKernelWorkGroupInfo(k, cl->device, CL_KERNEL_WORK_GROUP_SIZE,
+                                 sizeof wg, &wg, NULL);
+        clReleaseKernel(k);
+        cl->use_local &= wg >= LOCAL;
+        cl->f64 |= f64;
     }
-    size_t wg = 0;
-    clGetKernelWorkGroupInfo(k, cl->device, CL_KERNEL_WORK_GROUP_SIZE,
-                             sizeof wg, &wg, NULL);
-    clReleaseKernel(k);
-    cl->use_local = wg >= LOCAL;
+    /* the double kernel is bit-identical to the C path only if the
+     * runtime honours FP_CONTRACT OFF: checked once, on a canned batch */
+    if (cl->f64 && !f64_exact(cl))
+        cl->f64 = 0;
     *out = cl;
     cl = NULL;
 fail:
@@ -553,9 +669,10 @@ static int kernel_buffers(const wm_field_batch *b, int f64, const packed *p,
     return n;
 }
 
-wm_status wm_cl_eval(void *user, const wm_field_batch *b, const wm_ctx *ctx)
+/* Evaluates batch b on device cl with its kernel (cl->f64). */
+static wm_status eval_batch(wm_cl *cl, const wm_field_batch *b,
+                            const wm_ctx *ctx)
 {
-    wm_cl *cl = user;
     const int f64 = cl->f64;
     packed p;
     wm_status st;
@@ -640,4 +757,9 @@ cleanup:
         clReleaseCommandQueue(q);
     packed_free(&p);
     return st;
+}
+
+wm_status wm_cl_eval(void *user, const wm_field_batch *b, const wm_ctx *ctx)
+{
+    return eval_batch(user, b, ctx);
 }

@@ -511,11 +511,14 @@ static uint64_t edge_min2(const wm_lake_edge *g, int64_t X, int64_t Y,
             /* a sample on the edge is exactly 0 away, so water (the
              * closed rule; the projection's rounding would leave it a few
              * ulps off, either side of the shore by its parity): the
-             * cross product of lattice differences is exact in double */
+             * cross product of lattice differences is exact in double
+             * below 2^53 (beyond, the OpenCL kernel rounds it alike); an
+             * edge of no length is a point */
             const double dot = px * abx + py * aby;
-            const double d2 = px * aby == py * abx && dot >= 0 && dot <= len2
-                                  ? 0.0
-                                  : seg_d2(px, py, abx, aby, inv);
+            const double d2 =
+                len2 > 0 && px * aby == py * abx && dot >= 0 && dot <= len2
+                    ? 0.0
+                    : seg_d2(px, py, abx, aby, inv);
             const double cur = row[i];
             row[i] = d2 < cur ? d2 : cur;
         }
