@@ -13,20 +13,36 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Rings of block (bx, 0) of scene s (n x n cells), with the exact
+ * search. */
+static wm_status extract_block(const wm_scene *s, int bx, wm_rings *r)
+{
+    wm_field f;
+    wm_probe p;
+    wm_status st = wm_field_compute(s, (int64_t)bx * s->n, 0, s->n + 1,
+                                    s->n + 1, NULL, &f, NULL);
+    if (st != WM_OK)
+        return st;
+    st = wm_probe_init(&p, s, bx, 0);
+    if (st == WM_OK)
+        st = wm_contour_extract_probed(&f, &p, r, NULL);
+    wm_probe_free(&p);
+    wm_field_free(&f);
+    return st;
+}
+
 /* Rings of block (0, 0) of scene s (n x n cells): without (probe == 0) or
  * with the exact search. */
 static wm_status extract(const wm_scene *s, int probe, wm_rings *r)
 {
+    if (probe)
+        return extract_block(s, 0, r);
     wm_field f;
-    wm_probe p;
     wm_status st =
         wm_field_compute(s, 0, 0, s->n + 1, s->n + 1, NULL, &f, NULL);
     if (st != WM_OK)
         return st;
-    st = wm_probe_init(&p, s, 0, 0);
-    if (st == WM_OK)
-        st = wm_contour_extract_probed(&f, probe ? &p : NULL, r, NULL);
-    wm_probe_free(&p);
+    st = wm_contour_extract_probed(&f, NULL, r, NULL);
     wm_field_free(&f);
     return st;
 }
@@ -112,6 +128,47 @@ static void bank_on_side(void)
     su_lake(&s, lake, &four, 1);
     su_finish(&s);
     side_gap(&s, 1, WM_Q - 1, "land between the lake and D on the side");
+}
+
+/* A river's round join whose bank crosses the block side x = 32 px by
+ * 0.3 lattice unit between two samples (its vertex 456 units left of the
+ * side, at y = 19.5 px, its radius 456.3 units), as rounding the inputs
+ * to the lattice leaves a bank drawn a fraction of a unit short of a side
+ * (Andorra with rivers 25 m wide at 7 m pixels and 1792 m blocks: the
+ * block across kept a ring a unit wide, a speck). The side's segment from
+ * y = 19 to 20 px is land in both blocks, the block across keeps no ring,
+ * and this block's river stays one ring. */
+static void bulge_across_side(void)
+{
+    wm_scene s;
+    su_init(&s, 32);
+    const double c = 32.0 - 456.0 / WM_Q; /* on the lattice */
+    const double v[] = {c - 10, 9.5, c, 19.5, c - 10, 29.5};
+    su_river(&s, v, 3, 456.3 / WM_Q);
+    su_finish(&s);
+    for (int bx = 0; bx < 2; bx++)
+    {
+        wm_probe p;
+        TAP_EQ(wm_probe_init(&p, &s, bx, 0), WM_OK, "probe of block (%d, 0)",
+               bx);
+        int32_t off[WM_Q];
+        int cls1 = 0;
+        const int k =
+            wm_probe_crossings(&p, (wm_pt){(1 - bx) * 32 * WM_Q, 19 * WM_Q}, 1,
+                               WM_Q, 0, &cls1, off, WM_Q);
+        TAP_EQ(k, 0,
+               "block (%d, 0): a bank 0.3 unit across the side leaves it land",
+               bx);
+        wm_probe_free(&p);
+    }
+    wm_rings r0 = {0}, r1 = {0};
+    TAP_EQ(extract_block(&s, 0, &r0), WM_OK, "the river's block extracts");
+    TAP_EQ(extract_block(&s, 1, &r1), WM_OK, "the block across extracts");
+    TAP_EQ(r0.nrings, 1, "the river is one ring");
+    TAP_EQ(r1.nrings, 0, "the block across keeps no ring a unit wide");
+    wm_rings_free(&r0);
+    wm_rings_free(&r1);
+    wm_scene_free(&s);
 }
 
 /* A river 5 px wide drawn along an arc of radius 40 px with a vertex
@@ -563,6 +620,7 @@ int main(void)
     wm_scene_free(&s);
     block_side();
     bank_on_side();
+    bulge_across_side();
     dense_bend();
     buried_crossings();
     return TAP_DONE();

@@ -847,6 +847,25 @@ static size_t cut_iv(const double *a, size_t na, const double *b, size_t nb,
     return n;
 }
 
+/* The water a lattice unit across a block side's segment (P, vertical,
+ * L), on each side of it (k = 0 before, 1 beyond), merged, into a[k] (na[k]
+ * pairs; owned by the caller, NULL on failure). Overwrites in->iv; 0 when
+ * out of memory. */
+static int water_across(wm_probe *in, wm_pt P, int vertical, int32_t L,
+                        double *a[2], size_t na[2])
+{
+    for (int k = 0; k < 2; k++)
+    {
+        const wm_pt Q = {P.x + (vertical ? 2 * k - 1 : 0),
+                         P.y + (vertical ? 0 : 2 * k - 1)};
+        if (!seg_water(in, Q, vertical, L, &na[k]) ||
+            !(a[k] = malloc((2 * na[k] + 2) * sizeof *a[k])))
+            return 0;
+        na[k] = merge_iv(memcpy(a[k], in->iv, 2 * na[k] * sizeof *a[k]), na[k]);
+    }
+    return 1;
+}
+
 /* A block side's segment along which lake edges lie (in->dv): there the
  * water is the lake's boundary alone, and it stays water only where the
  * points a lattice unit across the side, in both blocks, are water (as a
@@ -873,16 +892,7 @@ static int side_rule(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
         memcpy(d, in->dv, 2 * nd * sizeof *d);
     }
     const size_t nw = ok ? merge_iv(w, *niv) : 0;
-    for (int k = 0; k < 2 && ok; k++)
-    {
-        const wm_pt Q = {P.x + (vertical ? 2 * k - 1 : 0),
-                         P.y + (vertical ? 0 : 2 * k - 1)};
-        ok = seg_water(in, Q, vertical, L, &na[k]) &&
-             (a[k] = malloc((2 * na[k] + 2) * sizeof *a[k])) != NULL;
-        if (ok)
-            na[k] =
-                merge_iv(memcpy(a[k], in->iv, 2 * na[k] * sizeof *w), na[k]);
-    }
+    ok = ok && water_across(in, P, vertical, L, a, na);
     if (ok)
         ok = (m = malloc((2 * (na[0] + na[1]) + 2) * sizeof *m)) != NULL &&
              (x = malloc((2 * (nd + na[0] + na[1]) + 2) * sizeof *x)) != NULL &&
@@ -909,6 +919,62 @@ static int side_rule(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
     free(a[1]);
     free(m);
     free(x);
+    return ok;
+}
+
+/* Whether merged intervals a (na) overlap (lo, hi) with positive length. */
+static int meets(const double *a, size_t na, double lo, double hi)
+{
+    for (size_t i = 0; i < na; i++)
+        if (fmin(a[2 * i + 1], hi) > fmax(a[2 * i], lo))
+            return 1;
+    return 0;
+}
+
+/* A block side's segment: a water run strictly inside it (both its ends
+ * land) that does not reach a lattice unit into both blocks, across the
+ * side, is taken for land. Rounding the inputs to the lattice leaves such
+ * runs where a bank passes within a unit of a block line: one crossing
+ * the side by a fraction of a unit made the block across keep a ring a
+ * unit wide along it (a speck that the inputs as drawn do not have), as a
+ * sample on a block line is settled by the points a unit across
+ * (field.c). Land needs no such rule: a land run that barely reaches into
+ * a block leaves a notch a unit deep in its water's ring, not a ring, and
+ * one that reaches into one block only is the tip of a land wedge there.
+ * Not where an input's edge lies along the side (side_rule settles those).
+ * Both blocks find the same: the points across are a pure function of the
+ * global position. Rewrites the sorted in->iv (*niv); 0 when out of
+ * memory. */
+static int thin_runs(wm_probe *in, wm_pt P, int vertical, int32_t L,
+                     size_t *niv)
+{
+    double *w = malloc((2 * *niv + 2) * sizeof *w), *a[2] = {NULL, NULL};
+    size_t na[2] = {0, 0};
+    int ok = w != NULL, inner = 0;
+    if (ok)
+        memcpy(w, in->iv, 2 * *niv * sizeof *w);
+    const size_t nw = ok ? merge_iv(w, *niv) : 0;
+    for (size_t i = 0; i < nw; i++)
+        inner |= w[2 * i] > 0 && w[2 * i + 1] < L;
+    ok = ok && (!inner || water_across(in, P, vertical, L, a, na));
+    if (ok && inner)
+    {
+        size_t m = 0;
+        for (size_t i = 0; i < nw; i++)
+        {
+            const double lo = w[2 * i], hi = w[2 * i + 1];
+            if (lo > 0 && hi < L &&
+                !(meets(a[0], na[0], lo, hi) && meets(a[1], na[1], lo, hi)))
+                continue;
+            in->iv[2 * m] = lo;
+            in->iv[2 * m + 1] = hi;
+            m++;
+        }
+        *niv = m;
+    }
+    free(w);
+    free(a[0]);
+    free(a[1]);
     return ok;
 }
 
@@ -944,6 +1010,8 @@ int wm_probe_crossings(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
     if (niv > 1)
         sort_small(in->iv, niv, 2 * sizeof *in->iv, cmp_interval);
     if (on_side && in->ndv && !side_rule(in, P, vertical, L, cls0, *cls1, &niv))
+        return -1;
+    if (on_side && niv && !in->ndv && !thin_runs(in, P, vertical, L, &niv))
         return -1;
     return round_crossings(in->iv, niv, L, cls0, cls1, off, max);
 }
