@@ -91,7 +91,10 @@ SEEDS = range(int(os.environ.get('WM_TOPOLOGY_SEEDS', '40')))
 # at 0.9:115.2 the notch between the round caps of two rivers ending side
 # by side, its tip 0.54 px off: the corner recovery refused the tip because
 # a point of the new triangle's median lay 0.01 px inside a cap that
-# bulges across the chord (seam seed 146366; crease.c's class_near).
+# bulges across the chord (seam seed 146366; crease.c's class_near); at
+# 3:384 four lake pieces pointing their tips at one point 0.5 px apart: the
+# other pieces' rings took the corner recovery's eight nearest edges for
+# one tip, cut 0.52 px short (mosaic seed 175119; crease.c's PER_RING).
 # (The seam
 # scenes at other block sizes lie on real seams since the family's origin
 # is a corner of that block grid.)
@@ -100,7 +103,7 @@ REGRESSIONS = ['shore-94103', 'island-94499', 'island-94036', 'seam-98214@1:128'
                'subpixel-100273@0.25:32', 'mosaic-116135', 'mosaic-119073@0.25:32',
                'grid-118104@2:256', 'grid-126145@1:128', 'twins-126099',
                'mosaic-131073', 'grid-136003@0.3:48', 'grid-136125@0.3:48',
-               'seam-136414', 'seam-146366@0.9:115.2']
+               'seam-136414', 'seam-146366@0.9:115.2', 'mosaic-175119@3:384']
 SCENE_IDS = ['%s-%d' % (f, s) for f in adversarial.FAMILIES for s in SEEDS] + REGRESSIONS
 
 RUNS = {  # name: extra open options (METHOD=CONTOUR is the default)
