@@ -18,8 +18,6 @@
 #include <string.h>
 #include <unistd.h>
 
-extern const char wm_cl_field_source[]; /* field_cl.c: kernels/field.cl */
-
 static char last_msg[8192];
 static wm_status last_status;
 /* the kernel under test ("double", bit-identical to the C path: 0 px; or
@@ -362,7 +360,7 @@ int main(void)
     /* the field kernel with contraction allowed (OpenCL's default, which
      * a runtime ignoring the pragma gives too): the canned batch checked
      * at opening differs from the C path, so the float kernel runs */
-    char *fused = strdup(wm_cl_field_source);
+    char *fused = strdup(wm_cl_source());
     char *pragma =
         fused ? strstr(fused, "#pragma OPENCL FP_CONTRACT OFF") : NULL;
     if (pragma)

@@ -480,6 +480,11 @@ void wm_cl_use_float(wm_cl *cl)
     cl->f64 = 0;
 }
 
+const char *wm_cl_source(void)
+{
+    return wm_cl_field_source;
+}
+
 /* max(|bx - ax|, |by - ay|) */
 static int64_t span(int64_t ax, int64_t ay, int64_t bx, int64_t by)
 {

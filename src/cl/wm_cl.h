@@ -67,6 +67,9 @@ extern "C"
     /** Makes cl run the single-precision kernel (for tests). */
     void wm_cl_use_float(wm_cl *cl);
 
+    /** The embedded kernels/field.cl ("" in a build without OpenCL). */
+    const char *wm_cl_source(void);
+
     /**
      * 1 when every coordinate the kernel will see for this scene stays in
      * its exact integer range (|x| < 2^30 lattice units relative to a tile:

@@ -56,6 +56,11 @@ void wm_cl_use_float(wm_cl *cl)
     (void)cl;
 }
 
+const char *wm_cl_source(void)
+{
+    return "";
+}
+
 int wm_cl_fits(const wm_scene *s)
 {
     (void)s;
