@@ -256,19 +256,30 @@ static char *read_source(const char *dir, const wm_ctx *ctx)
 static wm_status eval_batch(wm_cl *cl, const wm_field_batch *b,
                             const wm_ctx *ctx);
 
-/* Whether the double kernel gives the C path's bits on a canned batch: a
- * runtime that fused products into FMAs despite FP_CONTRACT OFF (LLVM
- * with -ffp-contract=fast) would not. CHECK_TILES tiles, each against
- * CHECK_SEGS pseudo-random river segments (radii up to 12 px) and a lake
- * group of CHECK_EDGES edges, its parity 0 or 1 over the whole tile (a
- * parity constant where no edge is near, as the C path's narrow band
- * assumes). */
+/* The canned batch that tells whether the double kernel gives the C
+ * path's bits: a runtime that fused products into FMAs despite
+ * FP_CONTRACT OFF (LLVM with -ffp-contract=fast) would not. CHECK_TILES
+ * tiles, each against CHECK_SEGS river segments and a lake group of
+ * CHECK_EDGES edges, its parity 0 or 1 over the whole tile (a parity
+ * constant where no edge is near, as the C path's narrow band assumes). */
 enum
 {
     CHECK_TILES = 8,
     CHECK_SEGS = 16,
     CHECK_EDGES = 8
 };
+
+typedef struct
+{
+    wm_river_seg segs[CHECK_SEGS];
+    wm_lake_edge edges[CHECK_EDGES];
+    wm_scene s;
+    int64_t org[2 * CHECK_TILES];
+    size_t seg_start[CHECK_TILES + 1], grp_start[CHECK_TILES + 1];
+    size_t edge_start[CHECK_TILES + 1];
+    uint32_t seg[CHECK_TILES * CHECK_SEGS], edge[CHECK_TILES * CHECK_EDGES];
+    uint64_t mask[CHECK_TILES * WM_TS1];
+} canned;
 
 static int64_t lcg(uint32_t *x, int64_t range)
 {
@@ -287,24 +298,21 @@ static wm_lake_edge lcg_edge(uint32_t *x, int64_t span)
     return e;
 }
 
-static int f64_exact(wm_cl *cl)
+/* The canned scene: half its segments at random (radii up to 12 px);
+ * half lines of no width, 28 px along a sample row: on them the exact
+ * value is 0 while the projection's t = i / 28 is inexact, so any other
+ * rounding of p - t (b - a) shows (an FMA leaves +-1e-13 where the C
+ * path's product rounds to p); elsewhere a double's last bit seldom
+ * survives the rounding to float. A kernel built with contraction on
+ * differs at 18 of its 8,712 samples on PoCL. */
+static void canned_scene(canned *c)
 {
-    wm_river_seg segs[CHECK_SEGS];
-    wm_lake_edge edges[CHECK_EDGES];
-    wm_scene s;
-    memset(&s, 0, sizeof s);
     uint32_t x = 20261128u;
     const int64_t span = 48 * WM_Q; /* around the tiles */
-    /* half at random; half lines of no width, 28 px along a sample row:
-     * on them the exact value is 0 while the projection's t = i / 28 is
-     * inexact, so any other rounding of p - t (b - a) shows (an FMA leaves
-     * +-1e-13 where the C path's product rounds to p); elsewhere a double's
-     * last bit seldom survives the rounding to float. A kernel built with
-     * contraction on differs at 18 of these 8,712 samples on PoCL. */
     for (int i = 0; i < CHECK_SEGS; i++)
     {
         const wm_lake_edge e = lcg_edge(&x, span);
-        wm_river_seg *g = &segs[i];
+        wm_river_seg *g = &c->segs[i];
         *g = (wm_river_seg){e.ax, e.ay, e.bx, e.by, 0};
         g->r = (double)lcg(&x, 12 * WM_Q) + 0.37;
         if (i % 2)
@@ -316,40 +324,52 @@ static int f64_exact(wm_cl *cl)
         g->r = 0;
     }
     for (int i = 0; i < CHECK_EDGES; i++)
-        edges[i] = lcg_edge(&x, span);
-    s.segs = segs;
-    s.nsegs = CHECK_SEGS;
-    s.edges = edges;
-    s.nedges = CHECK_EDGES;
-    s.band = 2;
-    int64_t org[2 * CHECK_TILES];
-    size_t seg_start[CHECK_TILES + 1], grp_start[CHECK_TILES + 1];
-    size_t edge_start[CHECK_TILES + 1];
-    uint32_t seg[CHECK_TILES * CHECK_SEGS], edge[CHECK_TILES * CHECK_EDGES];
-    uint64_t mask[CHECK_TILES * WM_TS1];
+        c->edges[i] = lcg_edge(&x, span);
+    memset(&c->s, 0, sizeof c->s);
+    c->s.segs = c->segs;
+    c->s.nsegs = CHECK_SEGS;
+    c->s.edges = c->edges;
+    c->s.nedges = CHECK_EDGES;
+    c->s.band = 2;
+}
+
+/* The canned batch: every tile (on the pixel grid) against every item,
+ * its values into val. */
+static wm_field_batch canned_batch(canned *c, float *val)
+{
     for (int t = 0; t <= CHECK_TILES; t++)
     {
-        seg_start[t] = (size_t)t * CHECK_SEGS;
-        grp_start[t] = (size_t)t; /* one group per tile */
-        edge_start[t] = (size_t)t * CHECK_EDGES;
+        c->seg_start[t] = (size_t)t * CHECK_SEGS;
+        c->grp_start[t] = (size_t)t; /* one group per tile */
+        c->edge_start[t] = (size_t)t * CHECK_EDGES;
         if (t == CHECK_TILES)
             break;
-        org[2 * t] = (t % 4) * WM_TILE * WM_Q; /* samples on the pixel grid */
-        org[2 * t + 1] = (t / 4) * WM_TILE * WM_Q;
+        c->org[2 * t] = (t % 4) * WM_TILE * WM_Q;
+        c->org[2 * t + 1] = (t / 4) * WM_TILE * WM_Q;
         for (int i = 0; i < CHECK_SEGS; i++)
-            seg[t * CHECK_SEGS + i] = (uint32_t)i;
+            c->seg[t * CHECK_SEGS + i] = (uint32_t)i;
         for (int i = 0; i < CHECK_EDGES; i++)
-            edge[t * CHECK_EDGES + i] = (uint32_t)i;
+            c->edge[t * CHECK_EDGES + i] = (uint32_t)i;
         for (int j = 0; j < WM_TS1; j++) /* parity 1 in odd tiles */
-            mask[t * WM_TS1 + j] = t % 2 ? ~UINT64_C(0) : 0;
+            c->mask[t * WM_TS1 + j] = t % 2 ? ~UINT64_C(0) : 0;
     }
+    const wm_field_batch b = {&c->s,   CHECK_TILES,  c->org,      c->seg_start,
+                              c->seg,  c->grp_start, CHECK_TILES, c->edge_start,
+                              c->edge, c->mask,      val,         NULL,
+                              NULL};
+    return b;
+}
+
+/* Whether the double kernel gives the C path's bits on the canned batch. */
+static int f64_exact(wm_cl *cl)
+{
+    canned c;
     const size_t nv = (size_t)CHECK_TILES * WM_TS1 * WM_TS1;
     float *v = malloc(2 * nv * sizeof *v);
     if (!v)
         return 0;
-    wm_field_batch b = {&s,        CHECK_TILES, org,        seg_start, seg,
-                        grp_start, CHECK_TILES, edge_start, edge,      mask,
-                        v,         NULL,        NULL};
+    canned_scene(&c);
+    wm_field_batch b = canned_batch(&c, v);
     int same = wm_field_eval_c(NULL, &b, NULL) == WM_OK;
     b.val = v + nv;
     same = same && eval_batch(cl, &b, NULL) == WM_OK &&
