@@ -94,7 +94,7 @@ SEEDS = range(int(os.environ.get('WM_TOPOLOGY_SEEDS', '40')))
 # bulges across the chord (seam seed 146366; crease.c's class_near); at
 # 3:384 four lake pieces pointing their tips at one point 0.5 px apart: the
 # other pieces' rings took the corner recovery's eight nearest edges for
-# one tip, cut 0.52 px short (mosaic seed 175119; crease.c's PER_RING).
+# one tip, cut 0.52 px short (mosaic seed 175119; crease.c's RINGS).
 # (The seam
 # scenes at other block sizes lie on real seams since the family's origin
 # is a corner of that block grid.)

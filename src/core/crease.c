@@ -344,14 +344,16 @@ static int visit_edges(ringgrid *g, int32_t x0, int32_t y0, int32_t x1,
  * far banks of both arms, two edges each, were all nearer than the edge
  * that cut the tip). */
 #define NEAREST 8
-/* ... and at most this many from one ring: four lake pieces pointing
- * their tips at one point 0.5 pixel apart, the next pieces' rings near
- * their tips (lattice staircases of edges a few units long) took all
- * eight, and the fourth tip stayed cut 0.52 pixel short (mosaic seed
- * 175119 at 3 m) */
-#define PER_RING 3
+/* ... then the nearest edge of each of up to RINGS rings in reach: four
+ * lake pieces pointing their tips at one point 0.5 pixel apart, the next
+ * pieces' rings near one tip (lattice staircases of edges a few units
+ * long) took all eight, and that tip stayed cut 0.52 pixel short (mosaic
+ * seed 175119 at 3 m; a cap per ring instead lost a hairpin's tip, whose
+ * far banks are of its own ring: wedge seed 101159 at 2 m) */
+#define RINGS 4
 
-/* nearest edges search state: best[0] <= best[1] <= ..., n of them */
+/* nearest edges search state: best[0] <= best[1] <= ..., n of them; and
+ * per ring (up to RINGS of them, the nearest rings), its nearest edge */
 typedef struct
 {
     const ringgrid *g;
@@ -359,6 +361,10 @@ typedef struct
     size_t edge[NEAREST];
     int n;
     int32_t S; /* the block square's side: its edges are never split */
+    double rbest[RINGS];
+    size_t redge[RINGS];
+    uint32_t ring[RINGS];
+    int nr;
 } nearest;
 
 /* Whether edge a -> b lies on the block square [0, S]^2 (never split:
@@ -379,6 +385,45 @@ static double edge_dist(wm_pt a, wm_pt b, double x, double y)
     return sqrt(ex * ex + ey * ey);
 }
 
+/* Keeps edge k, at distance d, as its ring's nearest when it is nearer
+ * than that ring's (or the ring is new and one of the RINGS nearest). */
+static void ring_nearest(nearest *n, size_t k, double d)
+{
+    const uint32_t ring = n->g->ring_of[k];
+    int j = 0, far = 0;
+    while (j < n->nr && n->ring[j] != ring)
+        j++;
+    if (j == n->nr && n->nr == RINGS)
+    {
+        for (int i = 1; i < n->nr; i++)
+            far = n->rbest[i] > n->rbest[far] ? i : far;
+        if (d >= n->rbest[far])
+            return;
+        j = far;
+    }
+    else if (j < n->nr &&
+             (d > n->rbest[j] || (d == n->rbest[j] && k >= n->redge[j])))
+        return;
+    n->nr += j == n->nr;
+    n->ring[j] = ring;
+    n->rbest[j] = d;
+    n->redge[j] = k;
+}
+
+/* Forgets the rings whose nearest edge is farther than R. */
+static void drop_rings_beyond(nearest *n, double R)
+{
+    int m = 0;
+    for (int r = 0; r < n->nr; r++)
+        if (n->rbest[r] <= R)
+        {
+            n->rbest[m] = n->rbest[r];
+            n->redge[m] = n->redge[r];
+            n->ring[m++] = n->ring[r];
+        }
+    n->nr = m;
+}
+
 static int nearest_fn(void *arg, size_t k)
 {
     nearest *n = arg;
@@ -387,6 +432,7 @@ static int nearest_fn(void *arg, size_t k)
     if (on_square(a, b, n->S))
         return 1;
     const double d = edge_dist(a, b, n->x, n->y);
+    ring_nearest(n, k, d);
     int i = n->n;
     for (int j = 0; j < n->n; j++)
         if (n->edge[j] == k)
@@ -394,29 +440,9 @@ static int nearest_fn(void *arg, size_t k)
     while (i > 0 &&
            (d < n->best[i - 1] || (d == n->best[i - 1] && k < n->edge[i - 1])))
         i--;
-    const uint32_t ring = n->g->ring_of[k];
-    int nearer = 0, all = 0, drop = -1; /* of that ring; its farthest */
-    for (int j = 0; j < n->n; j++)
-        if (n->g->ring_of[n->edge[j]] == ring)
-        {
-            nearer += j < i;
-            all++;
-            drop = j;
-        }
-    if (i == NEAREST || nearer >= PER_RING)
+    if (i == NEAREST)
         return 1;
-    /* the ring's farthest goes when it would have one too many, else the
-     * list's last when it is full */
-    int last = n->n < NEAREST ? n->n : NEAREST - 1;
-    if (all >= PER_RING)
-    {
-        for (int j = drop; j + 1 < n->n; j++)
-        {
-            n->best[j] = n->best[j + 1];
-            n->edge[j] = n->edge[j + 1];
-        }
-        last = n->n - 1;
-    }
+    const int last = n->n < NEAREST ? n->n : NEAREST - 1;
     for (int j = last; j > i; j--)
     {
         n->best[j] = n->best[j - 1];
@@ -608,34 +634,56 @@ static int cmp_key(const void *a, const void *b)
     return c ? c : wm_pt_cmp(x->hi, y->hi);
 }
 
-/* Sets *ka to the first of the nearest edges nr (each, else one of its
- * neighbours: a truncated tip ends in a vertex, and either edge at it may
- * be the one to split) into which c may be inserted, or SIZE_MAX; returns
- * -1 when out of memory, else 0. */
+/* Edge k of the rings or a neighbour of it that may take corner c: 1 and
+ * *ka set, 0 none, -1 out of memory. */
+static int try_edge(wm_probe *in, ringgrid *g, size_t k, wm_pt c, int32_t S,
+                    const uint8_t *split, const insertion *ins, size_t nins,
+                    size_t *ka)
+{
+    const wm_rings *rings = g->r;
+    const size_t tries[3] = {k, succ(rings, g->ring_of, k),
+                             pred(rings, g->ring_of, k)};
+    for (int t = 0; t < 3; t++)
+    {
+        const int ok = can_insert(in, g, tries[t], c, S, split, ins, nins);
+        if (ok)
+        {
+            *ka = tries[t];
+            return ok;
+        }
+    }
+    return 0;
+}
+
+/* Sets *ka to the first of the nearest edges nr, then of the rings'
+ * nearest (each, else one of its neighbours: a truncated tip ends in a
+ * vertex, and either edge at it may be the one to split) into which c may
+ * be inserted, or SIZE_MAX; returns -1 when out of memory, else 0. */
 static int first_insertable(wm_probe *in, ringgrid *g, const nearest *nr,
                             wm_pt c, const uint8_t *split, const insertion *ins,
                             size_t nins, size_t *ka)
 {
-    const wm_rings *rings = g->r;
     *ka = SIZE_MAX;
     for (int e = 0; e < nr->n; e++)
     {
-        const size_t tries[3] = {nr->edge[e],
-                                 succ(rings, g->ring_of, nr->edge[e]),
-                                 pred(rings, g->ring_of, nr->edge[e])};
-        for (int t = 0; t < 3; t++)
-        {
-            const int ok =
-                can_insert(in, g, tries[t], c, nr->S, split, ins, nins);
-            if (ok < 0)
-                return -1;
-            if (ok)
-            {
-                *ka = tries[t];
-                return 0;
-            }
-        }
+        const int ok =
+            try_edge(in, g, nr->edge[e], c, nr->S, split, ins, nins, ka);
+        if (ok)
+            return ok < 0 ? -1 : 0;
     }
+    /* then each ring's nearest, unless tried above */
+    for (int r = 0; r < nr->nr; r++)
+    {
+        int seen = 0;
+        for (int e = 0; e < nr->n; e++)
+            seen |= nr->edge[e] == nr->redge[r];
+        const int ok = seen ? 0
+                            : try_edge(in, g, nr->redge[r], c, nr->S, split,
+                                       ins, nins, ka);
+        if (ok)
+            return ok < 0 ? -1 : 0;
+    }
+    *ka = SIZE_MAX;
     return 0;
 }
 
@@ -660,7 +708,7 @@ static int place_corner(wm_probe *in, ringgrid *g, corner *cd, pass_ins *pi)
     /* nearest edges: within a quarter pixel first (most corners have
      * one; every edge that near is visited, so the nearest is the nearest
      * of all) */
-    nearest nr = {g, c.x, c.y, {0}, {0}, 0, S};
+    nearest nr = {g, c.x, c.y, {0}, {0}, 0, S, {0}, {0}, {0}, 0};
     int32_t R = WM_Q / 4;
     if (visit_edges(g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn, &nr) < 0)
         return -1;
@@ -680,7 +728,7 @@ static int place_corner(wm_probe *in, ringgrid *g, corner *cd, pass_ins *pi)
     /* the nearest edges within a pixel, then (none taking the corner)
      * within WM_CREASE_REACH */
     R = WM_Q;
-    nr.n = 0;
+    nr.n = nr.nr = 0;
     if (visit_edges(g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn, &nr) < 0)
         return -1;
     size_t ka = SIZE_MAX;
@@ -689,13 +737,14 @@ static int place_corner(wm_probe *in, ringgrid *g, corner *cd, pass_ins *pi)
         if (pass == 1)
         {
             R = WM_CREASE_REACH;
-            nr.n = 0;
+            nr.n = nr.nr = 0;
             if (visit_edges(g, c.x - R, c.y - R, c.x + R, c.y + R, nearest_fn,
                             &nr) < 0)
                 return -1;
         }
         while (nr.n > 0 && nr.best[nr.n - 1] > R)
             nr.n--;
+        drop_rings_beyond(&nr, R);
         if (first_insertable(in, g, &nr, c, pi->split, pi->ins, pi->n, &ka) < 0)
             return -1;
     }
