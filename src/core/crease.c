@@ -683,7 +683,6 @@ static int first_insertable(wm_probe *in, ringgrid *g, const nearest *nr,
         if (ok)
             return ok < 0 ? -1 : 0;
     }
-    *ka = SIZE_MAX;
     return 0;
 }
 
