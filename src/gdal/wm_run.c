@@ -194,52 +194,160 @@ static int wait_ready(runner *r, size_t k, GDALProgressFunc pfn, void *pArg,
     return TRUE;
 }
 
+/* The block options of scene s, in lattice units. */
+static wm_block_opts block_opts(const WMScene *s)
+{
+    wm_block_opts o;
+    memset(&o, 0, sizeof o);
+    o.simplify = s->params.simplify / s->unit;
+    o.triangulate = 1;
+    o.method = s->params.method;
+    o.heuristic = s->params.heuristic;
+    o.merge = s->params.merge / s->unit;
+    o.min_area = s->params.min_feature_area / (s->unit * s->unit);
+    o.min_angle = s->params.min_angle;
+    o.max_edge = s->params.max_edge / s->unit;
+    o.dev = WMDeviceField(s->device);
+    return o;
+}
+
+static void runner_init(runner *r, const WMScene *s, const int64_t *blocks,
+                        size_t nblocks, const WMBlockSink *sink, int nthreads)
+{
+    memset(r, 0, sizeof *r);
+    r->s = s;
+    r->blocks = blocks;
+    r->nblocks = nblocks;
+    r->sink = sink;
+    r->window = 4 * (size_t)nthreads + 1; /* slack behind a slow block */
+    r->opts = block_opts(s);
+    r->pipelined = r->opts.dev != NULL;
+    r->slot = CPLCalloc(r->window, sizeof *r->slot);
+    r->prep = CPLCalloc(r->window, sizeof *r->prep);
+    r->field = CPLCalloc(r->window, sizeof *r->field);
+    r->fready = CPLCalloc(r->window, sizeof *r->fready);
+    r->fmsg = CPLCalloc(r->window, sizeof *r->fmsg);
+    r->fsec = CPLCalloc(r->window, sizeof *r->fsec);
+    r->ready = CPLCalloc(r->window, sizeof *r->ready);
+    r->msg = CPLCalloc(r->window, sizeof *r->msg);
+    pthread_mutex_init(&r->mu, NULL);
+    pthread_cond_init(&r->cv, NULL);
+}
+
+/* Starts the feeder (pipelined runs) and up to nthreads workers into th;
+ * returns how many threads started, *workers how many of them work. */
+static int start_threads(runner *r, int nthreads, pthread_t *th, int *workers)
+{
+    int started = 0;
+    *workers = 0;
+    if (r->pipelined && pthread_create(&th[started], NULL, feeder, r) != 0)
+        return 0;
+    started += r->pipelined;
+    for (; *workers < nthreads; (*workers)++, started++)
+        if (pthread_create(&th[started], NULL, worker, r) != 0)
+            break;
+    return started;
+}
+
+/* Stops and joins the threads, then frees what the slots still hold. */
+static void runner_free(runner *r, pthread_t *th, int started)
+{
+    pthread_mutex_lock(&r->mu);
+    __atomic_store_n(&r->stop, 1, __ATOMIC_RELAXED);
+    pthread_cond_broadcast(&r->cv);
+    pthread_mutex_unlock(&r->mu);
+    for (int t = 0; t < started; t++)
+        pthread_join(th[t], NULL);
+    for (size_t k = 0; k < r->window; k++)
+    {
+        if (r->ready[k] > 0)
+            wm_block_result_free(&r->slot[k]);
+        if (r->prep[k])
+            r->sink->drop(r->sink->user, r->prep[k]);
+        if (r->fready[k] > 0)
+            wm_field_free(&r->field[k]);
+        CPLFree(r->msg[k]);
+        CPLFree(r->fmsg[k]);
+    }
+    CPLFree(r->field);
+    CPLFree(r->fready);
+    CPLFree(r->fmsg);
+    CPLFree(r->fsec);
+    CPLFree(r->slot);
+    CPLFree(r->prep);
+    CPLFree(r->ready);
+    CPLFree(r->msg);
+    pthread_mutex_destroy(&r->mu);
+    pthread_cond_destroy(&r->cv);
+}
+
+/* Takes block i's result out of its slot once ready (*prep: what the sink
+ * prepared); CE_Failure when the user stopped the run or the block failed,
+ * with the error reported. */
+static CPLErr take_block(runner *r, size_t i, GDALProgressFunc pfn, void *pArg,
+                         wm_block_result *res, void **prep)
+{
+    const size_t k = i % r->window;
+    pthread_mutex_lock(&r->mu);
+    if (!wait_ready(r, k, pfn, pArg, (double)i / (double)r->nblocks))
+    {
+        pthread_mutex_unlock(&r->mu);
+        CPLError(CE_Failure, CPLE_UserInterrupt, "User terminated");
+        return CE_Failure;
+    }
+    *res = r->slot[k];
+    *prep = r->prep[k];
+    r->prep[k] = NULL;
+    const int ok = r->ready[k] > 0;
+    char *msg = r->msg[k];
+    r->ready[k] = 0;
+    r->msg[k] = NULL;
+    r->consumed = i + 1;
+    pthread_cond_broadcast(&r->cv);
+    pthread_mutex_unlock(&r->mu);
+    if (!ok)
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: block (%lld, %lld): %s",
+                 (long long)r->blocks[2 * i], (long long)r->blocks[2 * i + 1],
+                 msg ? msg : "failed");
+    CPLFree(msg);
+    return ok ? CE_None : CE_Failure;
+}
+
+/* Adds block result res to the run's figures. */
+static void add_block_stats(WMRunStats *stats, const wm_block_result *res)
+{
+    for (int st = 0; st < WM_STAGE_COUNT; st++)
+        stats->seconds[st] += res->seconds[st];
+    stats->blocks++;
+    stats->polygons += res->npolys;
+    stats->vertices += res->rings.npts;
+    stats->triangles += res->poly_tri ? res->poly_tri[res->npolys] : 0;
+    stats->mixed_tiles += res->mixed_tiles;
+    stats->samples += res->samples;
+    stats->pairs += res->pairs;
+    stats->contour_vertices += res->contour_vertices;
+    stats->steiner += res->steiner;
+    stats->small_input += res->small_input;
+    stats->left += res->left;
+    stats->at_side += res->at_side;
+}
+
 CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
                    const WMBlockSink *sink, GDALProgressFunc pfn, void *pArg,
                    WMRunStats *stats)
 {
     CPLErr err = CE_None;
     runner r;
-    memset(&r, 0, sizeof r);
     memset(stats, 0, sizeof *stats);
     const double t0 = wm_now();
     int nthreads = s->params.num_threads;
     if ((size_t)nthreads > nblocks)
         nthreads = nblocks ? (int)nblocks : 1;
-    r.s = s;
-    r.blocks = blocks;
-    r.nblocks = nblocks;
-    r.sink = sink;
-    r.window = 4 * (size_t)nthreads + 1; /* slack behind a slow block */
-    r.opts.simplify = s->params.simplify / s->unit;
-    r.opts.triangulate = 1;
-    r.opts.method = s->params.method;
-    r.opts.heuristic = s->params.heuristic;
-    r.opts.merge = s->params.merge / s->unit;
-    r.opts.min_area = s->params.min_feature_area / (s->unit * s->unit);
-    r.opts.min_angle = s->params.min_angle;
-    r.opts.max_edge = s->params.max_edge / s->unit;
-    r.opts.dev = WMDeviceField(s->device);
-    r.pipelined = r.opts.dev != NULL;
-    r.slot = CPLCalloc(r.window, sizeof *r.slot);
-    r.prep = CPLCalloc(r.window, sizeof *r.prep);
-    r.field = CPLCalloc(r.window, sizeof *r.field);
-    r.fready = CPLCalloc(r.window, sizeof *r.fready);
-    r.fmsg = CPLCalloc(r.window, sizeof *r.fmsg);
-    r.fsec = CPLCalloc(r.window, sizeof *r.fsec);
-    r.ready = CPLCalloc(r.window, sizeof *r.ready);
-    r.msg = CPLCalloc(r.window, sizeof *r.msg);
-    pthread_mutex_init(&r.mu, NULL);
-    pthread_cond_init(&r.cv, NULL);
+    runner_init(&r, s, blocks, nblocks, sink, nthreads);
     pthread_t *th = CPLCalloc((size_t)nthreads + 1, sizeof *th);
-    int started = 0, workers = 0;
-    if (!r.pipelined || pthread_create(&th[started], NULL, feeder, &r) == 0)
-    {
-        started += r.pipelined;
-        for (; workers < nthreads; workers++, started++)
-            if (pthread_create(&th[started], NULL, worker, &r) != 0)
-                break;
-    }
+    int workers;
+    const int started = start_threads(&r, nthreads, th, &workers);
     if (workers == 0)
     {
         CPLError(CE_Failure, CPLE_AppDefined,
@@ -253,90 +361,23 @@ CPLErr WMRunBlocks(const WMScene *s, const int64_t *blocks, size_t nblocks,
     }
     for (size_t i = 0; err == CE_None && i < nblocks; i++)
     {
-        const size_t k = i % r.window;
-        pthread_mutex_lock(&r.mu);
-        if (!wait_ready(&r, k, pfn, pArg, (double)i / (double)nblocks))
-        {
-            pthread_mutex_unlock(&r.mu);
-            CPLError(CE_Failure, CPLE_UserInterrupt, "User terminated");
-            err = CE_Failure;
+        wm_block_result res;
+        void *prep;
+        err = take_block(&r, i, pfn, pArg, &res, &prep);
+        if (err != CE_None)
             break;
-        }
-        wm_block_result res = r.slot[k];
-        void *prep = r.prep[k];
-        r.prep[k] = NULL;
-        const int ok = r.ready[k] > 0;
-        char *msg = r.msg[k];
-        r.ready[k] = 0;
-        r.msg[k] = NULL;
-        r.consumed = i + 1;
-        pthread_cond_broadcast(&r.cv);
-        pthread_mutex_unlock(&r.mu);
-        if (!ok)
-        {
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "WATERMESH: block (%lld, %lld): %s",
-                     (long long)blocks[2 * i], (long long)blocks[2 * i + 1],
-                     msg ? msg : "failed");
-            CPLFree(msg);
-            err = CE_Failure;
-            break;
-        }
-        CPLFree(msg);
         WMDeviceWarn(s->device);
-        for (int st = 0; st < WM_STAGE_COUNT; st++)
-            stats->seconds[st] += res.seconds[st];
-        stats->blocks++;
-        stats->polygons += res.npolys;
-        stats->vertices += res.rings.npts;
-        stats->triangles += res.poly_tri ? res.poly_tri[res.npolys] : 0;
-        stats->mixed_tiles += res.mixed_tiles;
-        stats->samples += res.samples;
-        stats->pairs += res.pairs;
-        stats->contour_vertices += res.contour_vertices;
-        stats->steiner += res.steiner;
-        stats->small_input += res.small_input;
-        stats->left += res.left;
-        stats->at_side += res.at_side;
+        add_block_stats(stats, &res);
         if (!sink->put(sink->user, &res, prep))
-        {
             err = CE_Failure;
-            break;
-        }
-        if (pfn && !pfn((double)(i + 1) / (double)nblocks, "", pArg))
+        else if (pfn && !pfn((double)(i + 1) / (double)nblocks, "", pArg))
         {
             CPLError(CE_Failure, CPLE_UserInterrupt, "User terminated");
             err = CE_Failure;
         }
     }
-    pthread_mutex_lock(&r.mu);
-    __atomic_store_n(&r.stop, 1, __ATOMIC_RELAXED);
-    pthread_cond_broadcast(&r.cv);
-    pthread_mutex_unlock(&r.mu);
-    for (int t = 0; t < started; t++)
-        pthread_join(th[t], NULL);
-    for (size_t k = 0; k < r.window; k++)
-    {
-        if (r.ready[k] > 0)
-            wm_block_result_free(&r.slot[k]);
-        if (r.prep[k])
-            sink->drop(sink->user, r.prep[k]);
-        if (r.fready[k] > 0)
-            wm_field_free(&r.field[k]);
-        CPLFree(r.msg[k]);
-        CPLFree(r.fmsg[k]);
-    }
-    CPLFree(r.field);
-    CPLFree(r.fready);
-    CPLFree(r.fmsg);
-    CPLFree(r.fsec);
+    runner_free(&r, th, started);
     CPLFree(th);
-    CPLFree(r.slot);
-    CPLFree(r.prep);
-    CPLFree(r.ready);
-    CPLFree(r.msg);
-    pthread_mutex_destroy(&r.mu);
-    pthread_cond_destroy(&r.cv);
     stats->wall = wm_now() - t0;
     return err;
 }
