@@ -852,6 +852,127 @@ static int s_qpt_cmp(const void *pa, const void *pb)
     return (a->k > b->k) - (a->k < b->k);
 }
 
+/* The work of s_fix_queries: query points of one S sorted by x, their
+ * parities, and the (query, span) pairs found and the spans to refine. */
+typedef struct
+{
+    s_qpt *pts;
+    size_t np;
+    unsigned char *par; /* per query of the group */
+    s_seg *hits;        /* (query index, span start) */
+    size_t nhit, hit_cap;
+    uint32_t *marks;
+    size_t nmark, mark_cap;
+} s_fixer;
+
+/* Bounding box of the input vertices of the span from kept vertex u to v. */
+static void s_span_box(const simp *sp, uint32_t u, uint32_t v, int32_t *x0,
+                       int32_t *y0, int32_t *x1, int32_t *y1)
+{
+    *x0 = *x1 = sp->P[u].x;
+    *y0 = *y1 = sp->P[u].y;
+    for (uint32_t i = s_nxt(sp, u);; i = s_nxt(sp, i))
+    {
+        const wm_pt p = sp->P[i];
+        *x0 = p.x < *x0 ? p.x : *x0;
+        *x1 = p.x > *x1 ? p.x : *x1;
+        *y0 = p.y < *y0 ? p.y : *y0;
+        *y1 = p.y > *y1 ? p.y : *y1;
+        if (i == v)
+            break;
+    }
+}
+
+/* Toggles the parity of every query point (index base g) inside the span
+ * polygon from u to v and records the pair; 0 when out of memory. */
+static int s_span_hits(const simp *sp, s_fixer *fx, size_t g, uint32_t u,
+                       uint32_t v)
+{
+    int32_t x0, y0, x1, y1;
+    s_span_box(sp, u, v, &x0, &y0, &x1, &y1);
+    size_t lo = 0, hi = fx->np; /* first point with x >= x0 */
+    while (lo < hi)
+    {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (fx->pts[mid].x < x0)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    for (size_t m = lo; m < fx->np && fx->pts[m].x <= x1; m++)
+    {
+        const wm_pt q = {fx->pts[m].x, fx->pts[m].y};
+        if (q.y < y0 || q.y > y1 || !s_span_parity(sp, u, v, q))
+            continue;
+        fx->par[fx->pts[m].k - g] ^= 1;
+        if (!wm_grow((void **)&fx->hits, &fx->hit_cap, fx->nhit + 1,
+                     sizeof *fx->hits))
+            return 0;
+        fx->hits[fx->nhit++] = (s_seg){fx->pts[m].k, u};
+    }
+    return 1;
+}
+
+/* fx->marks: the spans of S (sorted, maybe repeated) holding a query point
+ * of the group (index base g) whose parity is odd; 0 when out of memory. */
+static int s_odd_spans(const simp *sp, s_fixer *fx, size_t g, uint32_t S)
+{
+    const uint32_t first = sp->rep[S];
+    uint32_t u = first;
+    fx->nhit = fx->nmark = 0;
+    memset(fx->par, 0, fx->np);
+    do
+    {
+        const uint32_t v = sp->nk[u];
+        if (s_nxt(sp, u) != v && !s_span_hits(sp, fx, g, u, v))
+            return 0;
+        u = v;
+    } while (u != first);
+    for (size_t h = 0; h < fx->nhit; h++)
+        if (fx->par[fx->hits[h].u - g])
+        {
+            if (!wm_grow((void **)&fx->marks, &fx->mark_cap, fx->nmark + 1,
+                         sizeof *fx->marks))
+                return 0;
+            fx->marks[fx->nmark++] = fx->hits[h].v;
+        }
+    if (fx->nmark > 1)
+        qsort(fx->marks, fx->nmark, sizeof *fx->marks, s_u32_cmp);
+    return 1;
+}
+
+/* Repeats on ring S (its queries qs[g .. g + fx->np)) until every query is
+ * answered as in the input: each pass refines the spans with an odd
+ * parity (an odd span is never an input edge: each pass restores). */
+static wm_status s_fix_ring(simp *sp, s_fixer *fx, const s_query *qs, size_t g,
+                            int *did)
+{
+    const uint32_t S = qs[g].S;
+    for (size_t k = g; k < g + fx->np; k++)
+    {
+        const wm_pt q = sp->P[sp->rep[qs[k].t]];
+        fx->pts[k - g] = (s_qpt){q.x, q.y, (uint32_t)k};
+    }
+    qsort(fx->pts, fx->np, sizeof *fx->pts, s_qpt_cmp);
+    for (;;)
+    {
+        if (!s_odd_spans(sp, fx, g, S))
+            return wm_fail(sp->ctx, WM_ERR_NOMEM, "simplify: out of memory");
+        if (fx->nmark == 0)
+            return WM_OK; /* every query of S answered as in the input */
+        for (size_t m = 0; m < fx->nmark; m++)
+        {
+            int d;
+            if (m > 0 && fx->marks[m] == fx->marks[m - 1])
+                continue;
+            const wm_status st = s_refine(sp, fx->marks[m], &d);
+            if (st != WM_OK)
+                return st;
+            *did |= d;
+        }
+    }
+}
+
 /* For every query (S, t) whose answer changed, refines the spans of S whose
  * span polygon holds t's representative vertex an odd number of times
  * (their parities add up to the change), and repeats on S until every
@@ -861,123 +982,27 @@ static int s_qpt_cmp(const void *pa, const void *pb)
 static wm_status s_fix_queries(simp *sp, s_query *qs, size_t nq, int *did)
 {
     wm_status st = WM_OK;
-    unsigned char *par = NULL;
-    s_seg *hits = NULL; /* (query index, segment start) */
-    s_qpt *pts = NULL;
-    uint32_t *marks = NULL;
-    size_t hit_cap = 0, mark_cap = 0;
+    s_fixer fx;
+    memset(&fx, 0, sizeof fx);
     *did = 0;
-    par = calloc(nq ? nq : 1, 1);
-    pts = malloc((nq ? nq : 1) * sizeof *pts);
-    if (!par || !pts)
-    {
+    fx.par = calloc(nq ? nq : 1, 1);
+    fx.pts = malloc((nq ? nq : 1) * sizeof *fx.pts);
+    if (!fx.par || !fx.pts)
         st = wm_fail(sp->ctx, WM_ERR_NOMEM, "simplify: out of memory");
-        goto cleanup;
-    }
-    qsort(qs, nq, sizeof *qs, s_query_cmp);
-    for (size_t g = 0; g < nq;)
+    else
+        qsort(qs, nq, sizeof *qs, s_query_cmp);
+    for (size_t g = 0; st == WM_OK && g < nq; g += fx.np)
     {
         size_t ge = g;
-        const uint32_t S = qs[g].S;
-        while (ge < nq && qs[ge].S == S)
+        while (ge < nq && qs[ge].S == qs[g].S)
             ge++;
-        const size_t np = ge - g;
-        for (size_t k = g; k < ge; k++)
-        {
-            const wm_pt q = sp->P[sp->rep[qs[k].t]];
-            pts[k - g].x = q.x;
-            pts[k - g].y = q.y;
-            pts[k - g].k = (uint32_t)k;
-        }
-        qsort(pts, np, sizeof *pts, s_qpt_cmp);
-        for (;;)
-        {
-            size_t nhit = 0, nmark = 0;
-            const uint32_t first = sp->rep[S];
-            uint32_t u = first;
-            memset(par + g, 0, np);
-            do
-            {
-                const uint32_t v = sp->nk[u];
-                if (s_nxt(sp, u) != v)
-                {
-                    int32_t x0 = sp->P[u].x, x1 = x0, y0 = sp->P[u].y;
-                    int32_t y1 = y0;
-                    for (uint32_t i = s_nxt(sp, u);; i = s_nxt(sp, i))
-                    {
-                        const wm_pt p = sp->P[i];
-                        x0 = p.x < x0 ? p.x : x0;
-                        x1 = p.x > x1 ? p.x : x1;
-                        y0 = p.y < y0 ? p.y : y0;
-                        y1 = p.y > y1 ? p.y : y1;
-                        if (i == v)
-                            break;
-                    }
-                    size_t lo = 0, hi = np; /* first point with x >= x0 */
-                    while (lo < hi)
-                    {
-                        const size_t mid = lo + (hi - lo) / 2;
-                        if (pts[mid].x < x0)
-                            lo = mid + 1;
-                        else
-                            hi = mid;
-                    }
-                    for (size_t m = lo; m < np && pts[m].x <= x1; m++)
-                    {
-                        wm_pt q;
-                        q.x = pts[m].x;
-                        q.y = pts[m].y;
-                        if (q.y < y0 || q.y > y1 || !s_span_parity(sp, u, v, q))
-                            continue;
-                        par[pts[m].k] ^= 1;
-                        if (!wm_grow((void **)&hits, &hit_cap, nhit + 1,
-                                     sizeof *hits))
-                        {
-                            st = wm_fail(sp->ctx, WM_ERR_NOMEM,
-                                         "simplify: out of memory");
-                            goto cleanup;
-                        }
-                        hits[nhit].u = pts[m].k;
-                        hits[nhit].v = u;
-                        nhit++;
-                    }
-                }
-                u = v;
-            } while (u != first);
-            for (size_t h = 0; h < nhit; h++)
-                if (par[hits[h].u])
-                {
-                    if (!wm_grow((void **)&marks, &mark_cap, nmark + 1,
-                                 sizeof *marks))
-                    {
-                        st = wm_fail(sp->ctx, WM_ERR_NOMEM,
-                                     "simplify: out of memory");
-                        goto cleanup;
-                    }
-                    marks[nmark++] = hits[h].v;
-                }
-            if (nmark == 0)
-                break; /* every query of S answered as in the input */
-            if (nmark > 1)
-                qsort(marks, nmark, sizeof *marks, s_u32_cmp);
-            /* an odd span is never an input edge: each pass restores */
-            for (size_t m = 0; m < nmark; m++)
-            {
-                int d;
-                if (m > 0 && marks[m] == marks[m - 1])
-                    continue;
-                if ((st = s_refine(sp, marks[m], &d)) != WM_OK)
-                    goto cleanup;
-                *did |= d;
-            }
-        }
-        g = ge;
+        fx.np = ge - g;
+        st = s_fix_ring(sp, &fx, qs, g, did);
     }
-cleanup:
-    free(par);
-    free(hits);
-    free(pts);
-    free(marks);
+    free(fx.par);
+    free(fx.hits);
+    free(fx.pts);
+    free(fx.marks);
     return st;
 }
 
