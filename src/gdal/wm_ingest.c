@@ -821,13 +821,10 @@ static OGRGeometryH linear(OGRGeometryH g)
     return OGR_G_Clone(g);
 }
 
-static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
-                       OGRSpatialReferenceH dst, size_t *nvert, size_t wsrc[3])
+/* Whether RIVERS layer h's geometry type may hold lines (reported when
+ * not). */
+static int river_layer_type_ok(OGRLayerH h)
 {
-    feat_ctx fc = {"RIVERS", h, 0, unit, NULL};
-    int ok = TRUE;
-    size_t zero = 0, badw = 0;
-    attr_ref wf = {-1, NULL, OFTString}, cf = {-1, NULL, OFTString};
     const OGRwkbGeometryType lt = wkbFlatten(OGR_L_GetGeomType(h));
     if (lt == wkbPoint || lt == wkbMultiPoint || lt == wkbPolygon ||
         lt == wkbMultiPolygon || lt == wkbCurvePolygon || lt == wkbMultiSurface)
@@ -838,99 +835,81 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
                  OGR_L_GetName(h), OGRGeometryTypeToName(lt));
         return FALSE;
     }
-    if ((p->width_field &&
-         !attr_resolve(h, p->width_field, "WIDTH_FIELD", &wf)) ||
-        (p->class_field &&
-         !attr_resolve(h, p->class_field, "WIDTH_BY_CLASS", &cf)))
+    return TRUE;
+}
+
+/* Adds line string part, width w (m), as one river: its points read and
+ * thinned, then its segments. */
+static int add_river_line(builder *b, OGRGeometryH part, const feat_ctx *fc,
+                          double w, size_t *nvert)
+{
+    *nvert += (size_t)OGR_G_GetPointCount(part);
+    if (!read_points(b, part, fc) || !thin_dense(b) ||
+        !reserve((void **)&b->segs, &b->segs_cap, b->nsegs + b->npts,
+                 sizeof *b->segs))
         return FALSE;
-    if (!to_working(h, dst, &fc.ct))
-        return FALSE;
-    OGR_L_ResetReading(h);
-    OGRFeatureH f;
-    while (ok && (f = OGR_L_GetNextFeature(h)) != NULL)
+    for (size_t i = 0; i + 1 < b->npts; i++)
     {
-        fc.fid = OGR_F_GetFID(f);
-        OGRGeometryH g0 = OGR_F_GetGeometryRef(f);
-        if (!g0 || OGR_G_IsEmpty(g0))
-        {
-            OGR_F_Destroy(f);
-            continue;
-        }
-        int source;
-        const double w = river_width(f, p, &wf, &cf, &source);
-        wsrc[source]++;
-        badw += wf.field >= 0 && source != 0;
-        OGRGeometryH g = linear(g0);
-        const OGRwkbGeometryType t = wkbFlatten(OGR_G_GetGeometryType(g));
-        int nparts = 1;
-        if (t == wkbMultiLineString || t == wkbGeometryCollection)
-            nparts = OGR_G_GetGeometryCount(g);
-        else if (t != wkbLineString)
+        wm_river_seg *s = &b->segs[b->nsegs++];
+        s->ax = b->px[i];
+        s->ay = b->py[i];
+        s->bx = b->px[i + 1];
+        s->by = b->py[i + 1];
+        s->r = w / 2.0 / fc->unit;
+    }
+    if (b->npts > 1 && !reserve((void **)&b->line_end, &b->lines_cap,
+                                b->nlines + 1, sizeof *b->line_end))
+        return FALSE;
+    if (b->npts > 1)
+        b->line_end[b->nlines++] = b->nsegs;
+    return TRUE;
+}
+
+/* Adds river feature geometry g (a line string, or a collection of them),
+ * width w (m); reports any other member. */
+static int add_river(builder *b, OGRGeometryH g, const feat_ctx *fc, double w,
+                     size_t *nvert)
+{
+    const OGRwkbGeometryType t = wkbFlatten(OGR_G_GetGeometryType(g));
+    if (t == wkbLineString)
+        return add_river_line(b, g, fc, w, nvert);
+    if (t != wkbMultiLineString && t != wkbGeometryCollection)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: RIVERS layer '%s', feature " CPL_FRMT_GIB
+                 ": %s geometry; rivers must be lines.",
+                 OGR_L_GetName(fc->layer), fc->fid, OGRGeometryTypeToName(t));
+        return FALSE;
+    }
+    for (int k = 0; k < OGR_G_GetGeometryCount(g); k++)
+    {
+        OGRGeometryH part = OGR_G_GetGeometryRef(g, k);
+        if (wkbFlatten(OGR_G_GetGeometryType(part)) != wkbLineString)
         {
             CPLError(CE_Failure, CPLE_AppDefined,
                      "WATERMESH: RIVERS layer '%s', feature " CPL_FRMT_GIB
-                     ": %s geometry; rivers must be lines.",
-                     OGR_L_GetName(h), fc.fid, OGRGeometryTypeToName(t));
-            ok = FALSE;
+                     ": a %s member; rivers must be lines.",
+                     OGR_L_GetName(fc->layer), fc->fid,
+                     OGRGeometryTypeToName(OGR_G_GetGeometryType(part)));
+            return FALSE;
         }
-        size_t before = b->nsegs;
-        for (int k = 0; ok && k < nparts; k++)
-        {
-            OGRGeometryH part =
-                t == wkbLineString ? g : OGR_G_GetGeometryRef(g, k);
-            if (wkbFlatten(OGR_G_GetGeometryType(part)) != wkbLineString)
-            {
-                CPLError(CE_Failure, CPLE_AppDefined,
-                         "WATERMESH: RIVERS layer '%s', feature " CPL_FRMT_GIB
-                         ": a %s member; rivers must be lines.",
-                         OGR_L_GetName(h), fc.fid,
-                         OGRGeometryTypeToName(OGR_G_GetGeometryType(part)));
-                ok = FALSE;
-                break;
-            }
-            *nvert += (size_t)OGR_G_GetPointCount(part);
-            if (!read_points(b, part, &fc) || !thin_dense(b))
-            {
-                ok = FALSE;
-                break;
-            }
-            if (!reserve((void **)&b->segs, &b->segs_cap, b->nsegs + b->npts,
-                         sizeof *b->segs))
-            {
-                ok = FALSE;
-                break;
-            }
-            for (size_t i = 0; i + 1 < b->npts; i++)
-            {
-                wm_river_seg *s = &b->segs[b->nsegs++];
-                s->ax = b->px[i];
-                s->ay = b->py[i];
-                s->bx = b->px[i + 1];
-                s->by = b->py[i + 1];
-                s->r = w / 2.0 / unit;
-            }
-            if (b->npts > 1 && !reserve((void **)&b->line_end, &b->lines_cap,
-                                        b->nlines + 1, sizeof *b->line_end))
-            {
-                ok = FALSE;
-                break;
-            }
-            if (b->npts > 1)
-                b->line_end[b->nlines++] = b->nsegs;
-        }
-        if (ok && b->nsegs == before)
-            zero++;
-        OGR_G_DestroyGeometry(g);
-        OGR_F_Destroy(f);
+        if (!add_river_line(b, part, fc, w, nvert))
+            return FALSE;
     }
-    if (fc.ct)
-        OCTDestroyCoordinateTransformation(fc.ct);
-    if (ok && zero)
+    return TRUE;
+}
+
+/* The warnings of a RIVERS layer read: rivers of zero length skipped, and
+ * features whose width field could not be used. */
+static void warn_rivers(OGRLayerH h, const WMParams *p, size_t zero,
+                        size_t badw)
+{
+    if (zero)
         CPLError(CE_Warning, CPLE_AppDefined,
                  "WATERMESH: RIVERS layer '%s': %lu river(s) of zero length "
                  "skipped.",
                  OGR_L_GetName(h), (unsigned long)zero);
-    if (ok && badw)
+    if (badw)
         CPLError(CE_Warning, CPLE_AppDefined,
                  "WATERMESH: RIVERS layer '%s': %lu feature(s) with a NULL, "
                  "empty, unparsable, non-positive or absurd (> 100 km) '%s' "
@@ -939,6 +918,46 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
                  p->nclasses ? "WIDTH_BY_CLASS (or WIDTH where no class "
                                "matches)"
                              : CPLSPrintf("WIDTH=%g", p->width));
+}
+
+static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
+                       OGRSpatialReferenceH dst, size_t *nvert, size_t wsrc[3])
+{
+    feat_ctx fc = {"RIVERS", h, 0, unit, NULL};
+    int ok = TRUE;
+    size_t zero = 0, badw = 0;
+    attr_ref wf = {-1, NULL, OFTString}, cf = {-1, NULL, OFTString};
+    if (!river_layer_type_ok(h) ||
+        (p->width_field &&
+         !attr_resolve(h, p->width_field, "WIDTH_FIELD", &wf)) ||
+        (p->class_field &&
+         !attr_resolve(h, p->class_field, "WIDTH_BY_CLASS", &cf)) ||
+        !to_working(h, dst, &fc.ct))
+        return FALSE;
+    OGR_L_ResetReading(h);
+    OGRFeatureH f;
+    while (ok && (f = OGR_L_GetNextFeature(h)) != NULL)
+    {
+        fc.fid = OGR_F_GetFID(f);
+        OGRGeometryH g0 = OGR_F_GetGeometryRef(f);
+        if (g0 && !OGR_G_IsEmpty(g0))
+        {
+            int source;
+            const double w = river_width(f, p, &wf, &cf, &source);
+            wsrc[source]++;
+            badw += wf.field >= 0 && source != 0;
+            OGRGeometryH g = linear(g0);
+            const size_t before = b->nsegs;
+            ok = add_river(b, g, &fc, w, nvert);
+            zero += ok && b->nsegs == before;
+            OGR_G_DestroyGeometry(g);
+        }
+        OGR_F_Destroy(f);
+    }
+    if (fc.ct)
+        OCTDestroyCoordinateTransformation(fc.ct);
+    if (ok)
+        warn_rivers(h, p, zero, badw);
     return ok;
 }
 
