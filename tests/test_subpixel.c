@@ -171,6 +171,39 @@ static void bulge_across_side(void)
     wm_scene_free(&s);
 }
 
+/* Three lakes touching pairwise at a vertex each, around a land sliver
+ * 0.2 unit thick, a land wedge's tip at one of those vertices: a pinch
+ * point where four pieces meet. A leaf there kept six crossings; its
+ * pairing by the class of its centre left a bump of land a unit deep
+ * under the other pairing's chord, the rings crossed, and the block failed
+ * ("ring nesting does not alternate"; held-out lakes seed 198031 at
+ * 0.5 m). The other pairing draws apart. */
+static void pinch_of_three_lakes(void)
+{
+    static const double L0[] = {1918, 16326, 588,  15709,
+                                2722, 11107, 4053, 11724};
+    static const double L1[] = {1349, 14066, 709,  13769,
+                                2082, 10810, 2722, 11107};
+    static const double L2[] = {4053, 11724, 2082, 10810, 3954, 9355};
+    const double *lake[3] = {L0, L1, L2};
+    const int count[3] = {4, 4, 3};
+    wm_scene s;
+    su_init(&s, 128);
+    for (int k = 0; k < 3; k++)
+    {
+        double v[8];
+        for (int i = 0; i < 2 * count[k]; i++)
+            v[i] = lake[k][i] / WM_Q; /* lattice units to pixels, exact */
+        su_lake(&s, v, &count[k], 1);
+    }
+    su_finish(&s);
+    wm_rings r = {0};
+    TAP_EQ(extract_block(&s, 0, &r), WM_OK, "the pinch point's block extracts");
+    TAP_EQ(ring_meetings(&r), 0, "its rings are simple and disjoint");
+    wm_rings_free(&r);
+    wm_scene_free(&s);
+}
+
 /* A river 5 px wide drawn along an arc of radius 40 px with a vertex
  * every quarter pixel: the union's corners are the inner bends' (one per
  * vertex), and the candidates include where each bank's side meets the
@@ -621,6 +654,7 @@ int main(void)
     block_side();
     bank_on_side();
     bulge_across_side();
+    pinch_of_three_lakes();
     dense_bend();
     buried_crossings();
     return TAP_DONE();

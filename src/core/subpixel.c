@@ -1379,29 +1379,34 @@ static wm_pt turn_of(const rect *q, const xing *a, const xing *b, int t)
                     : detour(q, b, b);
 }
 
-/* Emits pairing `mate` of leaf q's k crossings x, of which at most two
- * pairs lie on one side (a land wedge entering the leaf from its bottom
- * and one from its top, their water joined between the tips: cluster
- * seed 154495 at 2 m). Such a pair turns one unit inside its side, at
- * the first of three places (across from its middle, from its out
- * crossing, from its other crossing), the pairs' places tried together,
- * where no two paths then meet (a path nesting it may leave the side at a
- * slant, passing under the middle's turn: crossings a unit apart, mosaic
- * seed 141419 at 2.5 m). Returns 1, 0 when out of memory, -1 when no
- * places do. */
+/* Most pairs on one side draw_pairs() places (3^SAME_PAIRS tries). */
+#define SAME_PAIRS 4
+
+/* Emits pairing `mate` of leaf q's k crossings x, of which at most
+ * SAME_PAIRS pairs lie on one side (a land wedge entering the leaf from
+ * its bottom and one from its top, their water joined between the tips:
+ * cluster seed 154495 at 2 m; three land bumps around a pinch point of
+ * three lakes). Such a pair turns one unit inside its side, at the first
+ * of three places (across from its middle, from its out crossing, from
+ * its other crossing), the pairs' places tried together, where no two
+ * paths then meet (a path nesting it may leave the side at a slant,
+ * passing under the middle's turn: crossings a unit apart, mosaic seed
+ * 141419 at 2.5 m). Returns 1, 0 when out of memory, -1 when no places
+ * do. */
 static int draw_pairs(walker *w, const rect *q, const xing *x, int k,
                       const int *mate)
 {
-    int s[2], m = 0; /* the out crossings of the pairs on one side */
+    int s[SAME_PAIRS], m = 0; /* the out crossings of the pairs on one side */
+    int tries = 1;
     for (int i = 0; i < k; i++)
         if (x[i].out && x[i].side == x[mate[i]].side)
         {
-            if (m == 2)
+            if (m == SAME_PAIRS)
                 return -1;
             s[m++] = i;
+            tries *= 3;
         }
     wm_pt d[2 * WM_LEAF_ARCS];
-    const int tries = m == 0 ? 1 : m == 1 ? 3 : 9;
     for (int t = 0; t < tries; t++)
     {
         for (int j = 0, u = t; j < m; j++, u /= 3)
@@ -1464,6 +1469,30 @@ static int pair_exact(walker *w, const rect *q, const xing *x, int k)
     return draw_pairs(w, q, x, k, mate);
 }
 
+/* mate[]: each out crossing of x[0 .. k) with the next one
+ * counter-clockwise (joined) or the previous one, as pair_all() pairs
+ * them. */
+static void adjacent_mates(const xing *x, int k, int joined, int *mate)
+{
+    for (int i = 0; i < k; i++)
+        if (x[i].out)
+        {
+            mate[i] = joined ? (i + 1) % k : (i + k - 1) % k;
+            mate[mate[i]] = i;
+        }
+}
+
+/* Whether pairing `mate` drawn as emit_pair() draws it (a pair on one side
+ * turning across from its middle) has paths that meet nowhere. */
+static int midway_apart(const rect *q, const xing *x, int k, const int *mate)
+{
+    wm_pt d[2 * WM_LEAF_ARCS];
+    for (int i = 0; i < k; i++)
+        if (x[i].out)
+            d[i] = detour(q, &x[i], &x[mate[i]]);
+    return paths_apart(x, k, mate, d);
+}
+
 /* Pairs the crossings of a rectangle too small to divide. Two on one side
  * are one path into the leaf and out, through the corners inside it
  * (through_corners()). More on one side: each with the next or previous
@@ -1475,7 +1504,8 @@ static int pair_exact(walker *w, const rect *q, const xing *x, int k)
  * corners joined) or the previous (separated), the pairing with fewer
  * pairs on one side winning, the class of the centre deciding a tie (its
  * pair on one side turning where the paths meet nowhere, draw_pairs(),
- * when there is such a place). */
+ * when there is such a place); where its paths would meet, the other
+ * pairing, when its paths meet nowhere. */
 static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
 {
     int one_side = 1;
@@ -1503,21 +1533,25 @@ static int pair_leaf(walker *w, const rect *q, const xing *x, int k)
     else
         joined = wm_probe_distance(w->probe, (q->x0 + q->x1) / 2.0,
                                    (q->y0 + q->y1) / 2.0, WM_PROBE_REACH) <= 0;
-    if (k <= 2 * WM_LEAF_ARCS)
+    if (k > 2 * WM_LEAF_ARCS)
+        return pair_all(w, q, x, k, joined);
+    int mate[2 * WM_LEAF_ARCS];
+    adjacent_mates(x, k, joined, mate);
+    if (same_side_pairs(x, mate, k) <= 1)
     {
-        int mate[2 * WM_LEAF_ARCS];
-        for (int i = 0; i < k; i++)
-            if (x[i].out)
-            {
-                mate[i] = joined ? (i + 1) % k : (i + k - 1) % k;
-                mate[mate[i]] = i;
-            }
-        const int drawn = same_side_pairs(x, mate, k) <= 1
-                              ? draw_pairs(w, q, x, k, mate)
-                              : -1;
+        const int drawn = draw_pairs(w, q, x, k, mate);
         if (drawn >= 0)
             return drawn;
     }
+    else if (midway_apart(q, x, k, mate))
+        return pair_all(w, q, x, k, joined);
+    /* its paths would meet: the other pairing, where it draws apart (a
+     * pinch point of three lakes' pieces, one land bump of a unit left
+     * under the other pairing's chord) */
+    adjacent_mates(x, k, !joined, mate);
+    const int drawn = draw_pairs(w, q, x, k, mate);
+    if (drawn >= 0)
+        return drawn;
     return pair_all(w, q, x, k, joined);
 }
 
