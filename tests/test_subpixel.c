@@ -171,6 +171,29 @@ static void bulge_across_side(void)
     wm_scene_free(&s);
 }
 
+/* A lake's edge along the side of blocks 0 and 1 (x = 32 px), a river in
+ * block 1 whose bank runs 0.9 unit off the side: the side's samples are
+ * water (the points a unit across are), and the land between the side and
+ * the bank, less than a unit wide, was rounded to a unit with a unit of the
+ * lake's water before it, which block 1 kept as a ring a unit wide along
+ * its side (held-out mixed seed 196131 at 4 m: a speck at a corner). */
+static void shore_on_side(void)
+{
+    wm_scene s;
+    su_init(&s, 32);
+    const double lake[] = {20, 5, 32, 5, 32, 25, 20, 25};
+    const int count = 4;
+    su_lake(&s, lake, &count, 1);
+    const double river[] = {34, 2, 34, 28};
+    su_river(&s, river, 2, (2 * WM_Q - 0.9) / WM_Q);
+    su_finish(&s);
+    wm_rings r = {0};
+    TAP_EQ(extract_block(&s, 1, &r), WM_OK, "the river's block extracts");
+    TAP_EQ(r.nrings, 1, "the river is one ring, the lake none in its block");
+    wm_rings_free(&r);
+    wm_scene_free(&s);
+}
+
 /* Three lakes touching pairwise at a vertex each, around a land sliver
  * 0.2 unit thick, a land wedge's tip at one of those vertices: a pinch
  * point where four pieces meet. A leaf there kept six crossings; its
@@ -655,6 +678,7 @@ int main(void)
     bank_on_side();
     bulge_across_side();
     pinch_of_three_lakes();
+    shore_on_side();
     dense_bend();
     buried_crossings();
     return TAP_DONE();

@@ -42,7 +42,7 @@ NUMBERS = {
     'PIXEL_SIZE': ('Pixel size: sample spacing (m)', 0.5, None, False),
     'BLOCK_SIZE': ('Block size (m): a multiple of the pixel size', 4096.0, None, False),
     'MERGE_DISTANCE': ('Merge shore vertices closer than (m; 0: off)', 0.0, None, True),
-    'MIN_FEATURE_AREA': ('Drop land holes and water parts smaller than (m²; 0: off)', 0.0,
+    'MIN_FEATURE_AREA': ('Drop land holes and water parts whose ring encloses less than (m²; 0: off)', 0.0,
                          None, True),
     'MIN_ANGLE': ('Refine the mesh to a minimum angle (degrees; 0: off)', 0.0, 30.0, True),
     'MAX_EDGE': ('Refine the mesh to a maximum edge length (m; 0: off)', 0.0, None, True),
