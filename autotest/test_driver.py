@@ -628,6 +628,36 @@ def test_geographic_input_across_the_antimeridian(wm, tmp_dir):
     assert 1500 < oracle.total_area(res.water) < 3000
 
 
+@pytest.mark.parametrize('lakes_across', [False, True])
+def test_geographic_features_across_the_antimeridian(wm, tmp_dir, lakes_across):
+    """One river line crossing the antimeridian (its extent spans the
+    globe), or rivers just west of it and a lake across it (the layers'
+    centres 180 degrees apart): the zone of their own longitudes, 60 S or
+    1 S, never one 90 degrees away (zones 16, 31 and 31 S were taken:
+    scale 3.2 there, every width and pixel off by that much)."""
+    path = os.path.join(tmp_dir, 'anti2.gpkg')
+    if lakes_across:
+        rivers = [{'geom': 'LINESTRING (-179.9996 -17.5, -179.9990 -17.5004)', 'width': 8.0}]
+        lakes = [{'geom': 'POLYGON ((179.9994 -17.5001, -179.9997 -17.5001, '
+                          '-179.9997 -17.5004, 179.9994 -17.5004, 179.9994 -17.5001))'}]
+        scenes.write_layer(path, 'lakes', ogr.wkbPolygon, 4326, lakes)
+    else:
+        rivers = [{'geom': 'LINESTRING (179.9992 -17.5, -179.9993 -17.5002)', 'width': 8.0}]
+    scenes.write_layer(path, 'rivers', ogr.wkbLineString, 4326, rivers,
+                       fields=[('width', 'Real')])
+    o = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'WIDTH_FIELD': 'width',
+         'PIXEL_SIZE': 0.5, 'BLOCK_SIZE': 256}
+    if lakes_across:
+        o.update({'LAKES': path, 'LAKES_LAYER': 'lakes'})
+    res = wm.run(o)
+    assert srs_is(res.srs, 32760) or srs_is(res.srs, 32701), \
+        res.srs.ExportToWkt() if res.srs else None
+    # the lake 96 m x 33 m and the river 77 m x 8 m beside it, or the river
+    # alone 161 m x 8 m (scale 1 in the right zone; 3.2 in the wrong ones)
+    area = oracle.total_area(res.water)
+    assert (3000 < area < 4500) if lakes_across else (1100 < area < 1500), area
+
+
 def test_negative_block_indices(wm, tmp_dir):
     path = scenes.make_negative_scene(os.path.join(tmp_dir, 'neg.gpkg'))
     o = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'LAKES': path, 'LAKES_LAYER': 'lakes',

@@ -42,13 +42,49 @@ static OGRSpatialReferenceH clone_trad(OGRSpatialReferenceH s)
     return c;
 }
 
-/* Adds to sums[] (sin, cos of the longitude, latitude, count) the centre
- * of extent e of a layer whose CRS `ls` is geographic, in WGS 84
- * degrees. FALSE after CPLError when the extent is out of range for a
- * geographic CRS (projected coordinates in a layer said to be geographic,
- * such as GeoPackage's "undefined geographic" srs_id 0). */
-static int add_centre(OGRLayerH h, OGRSpatialReferenceH ls,
-                      const OGREnvelope *e, double *sums)
+/* Longitudes covered by the inputs, in bins of a tenth of a degree (the
+ * working CRS's zone needs no finer), and their latitude range. */
+#define LON_BINS 3600
+
+typedef struct
+{
+    unsigned char bin[LON_BINS];
+    double lat0, lat1;
+} lon_cover;
+
+/* Marks longitude x (degrees, any turn) covered. */
+static void cover_lon(lon_cover *c, double x)
+{
+    double b = fmod(floor((x + 180.0) * (LON_BINS / 360.0)), LON_BINS);
+    c->bin[(int)(b < 0 ? b + LON_BINS : b)] = 1;
+}
+
+/* Marks the longitudes of every vertex of geometry g (layer CRS),
+ * transformed by ct to WGS 84. */
+static void cover_vertices(lon_cover *c, OGRGeometryH g,
+                           OGRCoordinateTransformationH ct)
+{
+    const int parts = OGR_G_GetGeometryCount(g);
+    for (int k = 0; k < parts; k++)
+        cover_vertices(c, OGR_G_GetGeometryRef(g, k), ct);
+    const int n = parts ? 0 : OGR_G_GetPointCount(g);
+    for (int i = 0; i < n; i++)
+    {
+        double x = OGR_G_GetX(g, i), y = OGR_G_GetY(g, i);
+        if (OCTTransform(ct, 1, &x, &y, NULL))
+            cover_lon(c, x);
+    }
+}
+
+/* Marks the longitudes and latitudes of layer h, whose CRS `ls` is
+ * geographic and extent e: the extent's when it spans at most half the
+ * globe, else each vertex's (data across the antimeridian: a line from
+ * 179.99 to -179.99 has an extent all round the Earth). FALSE after
+ * CPLError when the extent is out of range for a geographic CRS
+ * (projected coordinates in a layer said to be geographic, such as
+ * GeoPackage's "undefined geographic" srs_id 0). */
+static int cover_layer(lon_cover *c, OGRLayerH h, OGRSpatialReferenceH ls,
+                       const OGREnvelope *e)
 {
     if (e->MinX < -360 || e->MaxX > 360 || e->MinY < -90.000001 ||
         e->MaxY > 90.000001)
@@ -64,11 +100,20 @@ static int add_centre(OGRLayerH h, OGRSpatialReferenceH ls,
     OSRSetWellKnownGeogCS(ll, "WGS84");
     OSRSetAxisMappingStrategy(ll, OAMS_TRADITIONAL_GIS_ORDER);
     OGRCoordinateTransformationH ct = OCTNewCoordinateTransformation(ls, ll);
-    /* longitudes as the circular mean of the features' centres when the
-     * extent spans more than half the globe (data across the
-     * antimeridian: the extent's centre is on the far side of the Earth) */
-    double sn = 0, cs = 0, sy = 0;
-    long n = 0;
+    OSRRelease(ll);
+    if (!ct)
+        return TRUE;
+    double x[2] = {e->MinX, e->MaxX}, y[2] = {e->MinY, e->MaxY};
+    if (OCTTransform(ct, 2, x, y, NULL))
+    {
+        c->lat0 = fmin(c->lat0, fmin(y[0], y[1]));
+        c->lat1 = fmax(c->lat1, fmax(y[0], y[1]));
+        if (e->MaxX - e->MinX <= 180)
+            for (double v = x[0]; v < x[1]; v += 360.0 / LON_BINS)
+                cover_lon(c, v);
+        cover_lon(c, x[0]);
+        cover_lon(c, x[1]);
+    }
     if (e->MaxX - e->MinX > 180)
     {
         OGR_L_ResetReading(h);
@@ -77,53 +122,53 @@ static int add_centre(OGRLayerH h, OGRSpatialReferenceH ls,
         {
             OGRGeometryH g = OGR_F_GetGeometryRef(f);
             if (g && !OGR_G_IsEmpty(g))
-            {
-                OGREnvelope fe;
-                OGR_G_GetEnvelope(g, &fe);
-                double x = (fe.MinX + fe.MaxX) / 2, y = (fe.MinY + fe.MaxY) / 2;
-                if (ct && OCTTransform(ct, 1, &x, &y, NULL))
-                {
-                    sn += sin(x * M_PI / 180);
-                    cs += cos(x * M_PI / 180);
-                    sy += y;
-                    n++;
-                }
-            }
+                cover_vertices(c, g, ct);
             OGR_F_Destroy(f);
         }
         OGR_L_ResetReading(h);
     }
-    else
-    {
-        double x = (e->MinX + e->MaxX) / 2, y = (e->MinY + e->MaxY) / 2;
-        if (ct && OCTTransform(ct, 1, &x, &y, NULL))
-        {
-            sn = sin(x * M_PI / 180);
-            cs = cos(x * M_PI / 180);
-            sy = y;
-            n = 1;
-        }
-    }
-    if (ct)
-        OCTDestroyCoordinateTransformation(ct);
-    OSRRelease(ll);
-    if (n > 0)
-    {
-        sums[0] += sn / (double)n;
-        sums[1] += cs / (double)n;
-        sums[2] += sy / (double)n;
-        sums[3] += 1;
-    }
+    OCTDestroyCoordinateTransformation(ct);
     return TRUE;
 }
 
-/* The centre (WGS 84 degrees) of the inputs, all geographic: per layer the
- * centre of its extent (of its features across the antimeridian), then
- * the circular mean of the layers' longitudes. FALSE after CPLError. */
+/* The middle of the shortest arc holding every covered longitude: the
+ * complement of the widest run of uncovered bins, around the circle. */
+static double cover_centre(const lon_cover *c)
+{
+    int first = -1;
+    for (int i = 0; i < LON_BINS && first < 0; i++)
+        if (c->bin[i])
+            first = i;
+    if (first < 0)
+        return 0;
+    int best = 0, best_end = first; /* widest gap, and the bin after it */
+    for (int i = 1, run = 0; i <= LON_BINS; i++)
+    {
+        const int b = (first + i) % LON_BINS;
+        if (!c->bin[b])
+            run++;
+        else
+        {
+            if (run > best)
+                best = run, best_end = b;
+            run = 0;
+        }
+    }
+    /* the arc runs from bin best_end over LON_BINS - best bins */
+    const double mid = best_end + (LON_BINS - best) / 2.0;
+    const double lon = mid * (360.0 / LON_BINS) - 180.0;
+    return lon > 180 ? lon - 360 : lon;
+}
+
+/* The centre (WGS 84 degrees) of the inputs, all geographic: the middle of
+ * the shortest arc of longitudes holding them all (across the antimeridian
+ * too), and of their latitudes. FALSE after CPLError. */
 static int geographic_centre(OGRLayerH hRivers, OGRLayerH hLakes, double *lon,
                              double *lat)
 {
-    double sums[4] = {0, 0, 0, 0};
+    lon_cover *c = CPLCalloc(1, sizeof *c);
+    c->lat0 = INFINITY;
+    c->lat1 = -INFINITY;
     OGRLayerH hl[2] = {hRivers, hLakes};
     for (int i = 0; i < 2; i++)
     {
@@ -131,21 +176,23 @@ static int geographic_centre(OGRLayerH hRivers, OGRLayerH hLakes, double *lon,
         if (!hl[i] || OGR_L_GetExtent(hl[i], &e, TRUE) != OGRERR_NONE)
             continue;
         OGRSpatialReferenceH ls = clone_trad(layer_srs(hl[i]));
-        const int ok = add_centre(hl[i], ls, &e, sums);
+        const int ok = cover_layer(c, hl[i], ls, &e);
         OSRRelease(ls);
         if (!ok)
+        {
+            CPLFree(c);
             return FALSE;
+        }
     }
-    if (sums[3] == 0)
-    {
+    const int none = !(c->lat0 <= c->lat1);
+    *lon = cover_centre(c);
+    *lat = (c->lat0 + c->lat1) / 2;
+    CPLFree(c);
+    if (none)
         CPLError(CE_Failure, CPLE_AppDefined,
                  "WATERMESH: the inputs are geographic and their extent "
                  "could not be read; set TARGET_SRS.");
-        return FALSE;
-    }
-    *lon = atan2(sums[0], sums[1]) * 180 / M_PI;
-    *lat = sums[2] / sums[3];
-    return TRUE;
+    return !none;
 }
 
 /* The projected CRS for geographic inputs centred at (lon, lat): the UTM
