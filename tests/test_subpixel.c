@@ -13,22 +13,29 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* Rings of block (bx, 0) of scene s (n x n cells), with the exact
+/* Rings of block (bx, by) of scene s (n x n cells), with the exact
  * search. */
-static wm_status extract_block(const wm_scene *s, int bx, wm_rings *r)
+static wm_status extract_block_at(const wm_scene *s, int bx, int by,
+                                  wm_rings *r)
 {
     wm_field f;
     wm_probe p;
-    wm_status st = wm_field_compute(s, (int64_t)bx * s->n, 0, s->n + 1,
-                                    s->n + 1, NULL, &f, NULL);
+    wm_status st = wm_field_compute(s, (int64_t)bx * s->n, (int64_t)by * s->n,
+                                    s->n + 1, s->n + 1, NULL, &f, NULL);
     if (st != WM_OK)
         return st;
-    st = wm_probe_init(&p, s, bx, 0);
+    st = wm_probe_init(&p, s, bx, by);
     if (st == WM_OK)
         st = wm_contour_extract_probed(&f, &p, r, NULL);
     wm_probe_free(&p);
     wm_field_free(&f);
     return st;
+}
+
+/* Rings of block (bx, 0) of scene s, with the exact search. */
+static wm_status extract_block(const wm_scene *s, int bx, wm_rings *r)
+{
+    return extract_block_at(s, bx, 0, r);
 }
 
 /* Rings of block (0, 0) of scene s (n x n cells): without (probe == 0) or
@@ -168,6 +175,41 @@ static void bulge_across_side(void)
     TAP_EQ(r1.nrings, 0, "the block across keeps no ring a unit wide");
     wm_rings_free(&r0);
     wm_rings_free(&r1);
+    wm_scene_free(&s);
+}
+
+/* Four rectangular lakes, one in each block around the corner (32, 32)
+ * px, their corners at (1, 1), (0, 0), (-1, -1) and (1, -1) units from
+ * it: the corner sample lies on a lake's corner, and the four points a
+ * unit diagonally from it are water, so it stayed water; each block kept
+ * a triangle of half a square unit at its corner, and the two lakes whose
+ * edges lie a unit apart across a block line a strip a unit wide along it
+ * (held-out round 23). Each block holds its lake alone. */
+static void four_lakes_at_a_corner(void)
+{
+    static const int corner[4][2] = {{1, 1}, {0, 0}, {-1, -1}, {1, -1}};
+    static const int dir[4][2] = {{1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
+    wm_scene s;
+    su_init(&s, 32);
+    for (int k = 0; k < 4; k++)
+    {
+        const double x0 = 32 + corner[k][0] / (double)WM_Q;
+        const double y0 = 32 + corner[k][1] / (double)WM_Q;
+        const double x1 = x0 + 10 * dir[k][0], y1 = y0 + 8 * dir[k][1];
+        const double v[] = {x0, y0, x1, y0, x1, y1, x0, y1};
+        const int count = 4;
+        su_lake(&s, v, &count, 1);
+    }
+    su_finish(&s);
+    for (int b = 0; b < 4; b++)
+    {
+        wm_rings r = {0};
+        TAP_EQ(extract_block_at(&s, b & 1, b >> 1, &r), WM_OK,
+               "block (%d, %d) extracts", b & 1, b >> 1);
+        TAP_EQ(r.nrings, 1, "block (%d, %d) holds its lake alone", b & 1,
+               b >> 1);
+        wm_rings_free(&r);
+    }
     wm_scene_free(&s);
 }
 
@@ -721,6 +763,7 @@ int main(void)
     pinch_of_three_lakes();
     shore_on_side();
     lone_rings_kept();
+    four_lakes_at_a_corner();
     dense_bend();
     buried_crossings();
     return TAP_DONE();

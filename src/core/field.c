@@ -1013,13 +1013,18 @@ static int water_at(const work *w, size_t t, int64_t X, int64_t Y)
  * the sample: the points a lattice unit across the line are water, or at a
  * block corner (both) the four a unit diagonally into the four blocks (two
  * lakes touching there along one edge leave the axis points all water and
- * a quadrant dry). */
+ * a quadrant dry) and the four a unit along the lines (four lakes' corners
+ * a unit diagonally off it, one on it, leave the diagonal points water and
+ * land along the lines: each block kept a triangle of half a square unit
+ * at its corner, held-out round 23). */
 static int water_across(const work *w, size_t t, int64_t X, int64_t Y,
                         int vertical, int horizontal)
 {
     if (vertical && horizontal)
         return water_at(w, t, X - 1, Y - 1) && water_at(w, t, X + 1, Y - 1) &&
-               water_at(w, t, X - 1, Y + 1) && water_at(w, t, X + 1, Y + 1);
+               water_at(w, t, X - 1, Y + 1) && water_at(w, t, X + 1, Y + 1) &&
+               water_at(w, t, X - 1, Y) && water_at(w, t, X + 1, Y) &&
+               water_at(w, t, X, Y - 1) && water_at(w, t, X, Y + 1);
     if (vertical)
         return water_at(w, t, X - 1, Y) && water_at(w, t, X + 1, Y);
     return water_at(w, t, X, Y - 1) && water_at(w, t, X, Y + 1);

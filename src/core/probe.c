@@ -982,13 +982,15 @@ static int thin_runs(wm_probe *in, wm_pt P, int vertical, int32_t L,
  * whose class there is water: such an end is a sample of the side settled
  * water (field.c settle_lines: the points a lattice unit across are water)
  * or a point of the side that side_rule leaves water alike, so a land run
- * from that end that is shorter than a unit is the rest of a shore lying
- * along the side (a lake's edge on it, a bank within a unit across): it is
+ * from that end of at most a unit (the point a unit across, on a closed
+ * shore, is water) is the rest of a shore lying along the side (a lake's
+ * edge on it, a bank or another lake's edge within a unit across): it is
  * water, as the end is. Rounded, it left a strip of water a unit wide
  * along the side, the lake's, which has none in this block, and the block
  * kept it as its own ring (a speck at a block corner: held-out mixed seed
- * 196131 at 4 m). Adds the run to the sorted in->iv (*niv) as water; 0
- * when out of memory. */
+ * 196131 at 4 m; two lakes a unit apart across a block line, round 23).
+ * Adds the run to the sorted in->iv (*niv) as water; 0 when out of
+ * memory. */
 static int settled_ends(wm_probe *in, int32_t L, int at0, int at1, size_t *niv)
 {
     double *w = malloc((2 * *niv + 2) * sizeof *w);
@@ -998,13 +1000,13 @@ static int settled_ends(wm_probe *in, int32_t L, int at0, int at1, size_t *niv)
     const size_t nw = merge_iv(w, *niv);
     double fill[4];
     size_t nf = 0;
-    if (at0 && nw > 1 && fabs(w[1]) < WM_COINCIDE && w[2] < 1.0)
+    if (at0 && nw > 1 && fabs(w[1]) < WM_COINCIDE && w[2] <= 1.0 + WM_COINCIDE)
     {
         fill[2 * nf] = w[1];
         fill[2 * nf++ + 1] = w[2];
     }
     if (at1 && nw > 1 && fabs(w[2 * nw - 2] - L) < WM_COINCIDE &&
-        w[2 * nw - 3] > L - 1.0)
+        w[2 * nw - 3] >= L - 1.0 - WM_COINCIDE)
     {
         fill[2 * nf] = w[2 * nw - 3];
         fill[2 * nf++ + 1] = w[2 * nw - 2];
