@@ -14,6 +14,7 @@
 
 #include <math.h>
 #include <stdint.h>
+#include <stdlib.h>
 #include <string.h>
 
 #define PI 3.14159265358979323846
@@ -66,12 +67,69 @@ typedef struct
     size_t below, ntris, nextra;
     double sharpest; /* the smallest angle, degrees */
     double area_in, area_out, worst_edge, perimeter;
+    double drift; /* farthest added shore point from the input's rings */
     wm_refine_stats st;
 } result;
 
 static wm_pt at(const wm_rings *r, const wm_pt *extra, uint32_t i)
 {
     return i < r->npts ? r->pts[i] : extra[i - r->npts];
+}
+
+/* Distance from p to the nearest edge of rings r. */
+static double to_rings(const wm_rings *r, wm_pt p)
+{
+    double best = INFINITY;
+    for (size_t q = 0; q < r->nrings; q++)
+        for (size_t i = r->start[q]; i < r->start[q + 1]; i++)
+        {
+            const wm_pt a = r->pts[i];
+            const wm_pt b =
+                r->pts[i + 1 < r->start[q + 1] ? i + 1 : r->start[q]];
+            const double dx = b.x - a.x, dy = b.y - a.y;
+            const double l2 = dx * dx + dy * dy;
+            double t = l2 > 0 ? ((p.x - a.x) * dx + (p.y - a.y) * dy) / l2 : 0;
+            t = t < 0 ? 0 : t > 1 ? 1 : t;
+            const double d = hypot(p.x - a.x - t * dx, p.y - a.y - t * dy);
+            best = d < best ? d : best;
+        }
+    return best;
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    const uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* The farthest from rings r of the added points (index >= r->npts) on the
+ * outline of triangles tris (nt): the edges no other triangle has
+ * reversed. */
+static double shore_drift(const wm_rings *r, const wm_pt *extra,
+                          const uint32_t *tris, size_t nt)
+{
+    uint64_t *e = malloc((3 * nt + 1) * sizeof *e);
+    for (size_t i = 0; i < 3 * nt; i++)
+        e[i] = (uint64_t)tris[i] << 32 | tris[i - i % 3 + (i % 3 + 1) % 3];
+    qsort(e, 3 * nt, sizeof *e, cmp_u64);
+    double worst = 0;
+    for (size_t i = 0; i < 3 * nt; i++)
+    {
+        const uint32_t u = (uint32_t)(e[i] >> 32), v = (uint32_t)e[i];
+        const uint64_t rev = (uint64_t)v << 32 | u;
+        if (bsearch(&rev, e, 3 * nt, sizeof *e, cmp_u64))
+            continue;
+        for (int k = 0; k < 2; k++)
+        {
+            const uint32_t w = k ? v : u;
+            if (w < r->npts)
+                continue;
+            const double d = to_rings(r, extra[w - r->npts]);
+            worst = d > worst ? d : worst;
+        }
+    }
+    free(e);
+    return worst;
 }
 
 /* Refines rings r (ring 0 outer) and checks the result. */
@@ -127,6 +185,7 @@ static result run(const wm_rings *r, const wm_refine_opts *o)
         res.ok_used &= used[i];
     res.area_in = (double)in2;
     res.area_out = (double)a2;
+    res.drift = shore_drift(r, extra, tris, nt);
     free(used);
     free(tris);
     free(extra);
@@ -292,6 +351,9 @@ int main(void)
         TAP_OK(x.below <= x.st.small_input + 2,
                "strip: below 20 degrees only at input angles (%zu, %zu input)",
                x.below, x.st.small_input);
+        TAP_OK(x.drift <= 0.7072,
+               "strip: shore points within 0.71 unit of the input (%.3f)",
+               x.drift);
         wm_rings_free(&r);
     }
     /* a thin wedge: its tip is an input angle of about 1 degree */
@@ -313,6 +375,9 @@ int main(void)
                x.worst_edge);
         TAP_OK(x.worst_edge <= 3000 + 1e-9, "wedge: longest edge %.1f <= 3000",
                x.worst_edge);
+        TAP_OK(x.drift <= 0.7072,
+               "wedge: shore points within 0.71 unit of the input (%.3f)",
+               x.drift);
         wm_rings_free(&r);
     }
     /* random stars with a hole, angle and length */
