@@ -178,6 +178,56 @@ static void bulge_across_side(void)
     wm_scene_free(&s);
 }
 
+/* Small lake rings in one cell that touch or nest: two lakes of 10 x 10
+ * units sharing an edge, two touching at a vertex, a lake in another's
+ * hole. Their rings as drawn are not the union's boundary; taken so, they
+ * failed the block ("a chain ends inside the block", "ring nesting does
+ * not alternate": held-out round 24). They are divided as before. */
+static void lone_rings_touching(void)
+{
+    const double u = 1.0 / WM_Q, x = 10 + 100 * u, y = 10 + 100 * u;
+    for (int c = 0; c < 3; c++)
+    {
+        wm_scene s;
+        su_init(&s, 32);
+        if (c < 2)
+        {
+            const double a[] = {x,          y,          x + 10 * u, y,
+                                x + 10 * u, y + 10 * u, x,          y + 10 * u};
+            const double d = c ? 10 * u : 0; /* the second: at a vertex */
+            const double b[] = {x + 10 * u, y + d,         x + 20 * u,
+                                y + d,      x + 20 * u,    y + d + 10 * u,
+                                x + 10 * u, y + d + 10 * u};
+            const int four = 4;
+            su_lake(&s, a, &four, 1);
+            su_lake(&s, b, &four, 1);
+        }
+        else
+        {
+            const double ring_hole[] = {
+                x,          y,          x + 30 * u, y,
+                x + 30 * u, y + 30 * u, x,          y + 30 * u,
+                x + 5 * u,  y + 5 * u,  x + 5 * u,  y + 25 * u,
+                x + 25 * u, y + 25 * u, x + 25 * u, y + 5 * u};
+            const int counts[] = {4, 4};
+            su_lake(&s, ring_hole, counts, 2);
+            const double in[] = {x + 10 * u, y + 10 * u, x + 20 * u,
+                                 y + 10 * u, x + 20 * u, y + 20 * u,
+                                 x + 10 * u, y + 20 * u};
+            const int four = 4;
+            su_lake(&s, in, &four, 1);
+        }
+        su_finish(&s);
+        wm_rings r = {0};
+        TAP_EQ(extract_block(&s, 0, &r), WM_OK,
+               "touching or nested rings %d: the block extracts", c);
+        TAP_EQ(ring_meetings(&r), 0,
+               "touching or nested rings %d: simple and disjoint", c);
+        wm_rings_free(&r);
+        wm_scene_free(&s);
+    }
+}
+
 /* Four rectangular lakes, one in each block around the corner (32, 32)
  * px, their corners at (1, 1), (0, 0), (-1, -1) and (1, -1) units from
  * it: the corner sample lies on a lake's corner, and the four points a
@@ -764,6 +814,7 @@ int main(void)
     shore_on_side();
     lone_rings_kept();
     four_lakes_at_a_corner();
+    lone_rings_touching();
     dense_bend();
     buried_crossings();
     return TAP_DONE();

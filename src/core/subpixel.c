@@ -1779,6 +1779,28 @@ static int seed_on_ring(wm_pt p, wm_pt (*rings)[LONE_MAX], const int *len,
     return 0;
 }
 
+/* Whether rings[0 .. nr) (len[k] points each) lie apart: no two meet,
+ * not even at a point, and none lies inside another (two lakes sharing an
+ * edge or a vertex, a lake in another's hole: their rings as drawn are not
+ * the union's boundary, and taken so they failed the block). */
+static int rings_apart(wm_pt (*rings)[LONE_MAX], const int *len, int nr)
+{
+    for (int j = 0; j < nr; j++)
+        for (int k = j + 1; k < nr; k++)
+        {
+            if (wm_point_in_ring(rings[k], (size_t)len[k], rings[j][0]) ||
+                wm_point_in_ring(rings[j], (size_t)len[j], rings[k][0]))
+                return 0;
+            for (int a = 0; a < len[j]; a++)
+                for (int b = 0; b < len[k]; b++)
+                    if (wm_segments_meet(
+                            rings[j][a], rings[j][(a + 1) % len[j]],
+                            rings[k][b], rings[k][(b + 1) % len[k]]))
+                        return 0;
+        }
+    return 1;
+}
+
 /* A rectangle q with no crossing on its sides but seeds inside it: a
  * feature of the union may lie wholly in it, an island smaller than a
  * pixel or a lake as small. Where every seed strictly inside q is a vertex
@@ -1836,7 +1858,7 @@ static int lone_rings(walker *w, const rect *q)
         if (!seed_on_ring(p, ring, len, nr))
             return -1; /* a seed of something else */
     }
-    if (nr == 0)
+    if (nr == 0 || !rings_apart(ring, len, nr))
         return -1;
     for (int k = 0; k < nr; k++)
         if (!emit_ring(w, ring[k], len[k], !water, area2[k]))
