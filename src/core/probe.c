@@ -847,6 +847,16 @@ static size_t cut_iv(const double *a, size_t na, const double *b, size_t nb,
     return n;
 }
 
+/* A merged copy of the niv water intervals in in->iv (*nw pairs; owned by
+ * the caller), or NULL when out of memory. */
+static double *merged_water(const wm_probe *in, size_t niv, size_t *nw)
+{
+    double *w = malloc((2 * niv + 2) * sizeof *w);
+    if (w)
+        *nw = merge_iv(memcpy(w, in->iv, 2 * niv * sizeof *w), niv);
+    return w;
+}
+
 /* The water a lattice unit across a block side's segment (P, vertical,
  * L), on each side of it (k = 0 before, 1 beyond), merged, into a[k] (na[k]
  * pairs; owned by the caller, NULL on failure). Overwrites in->iv; 0 when
@@ -859,9 +869,8 @@ static int water_across(wm_probe *in, wm_pt P, int vertical, int32_t L,
         const wm_pt Q = {P.x + (vertical ? 2 * k - 1 : 0),
                          P.y + (vertical ? 0 : 2 * k - 1)};
         if (!seg_water(in, Q, vertical, L, &na[k]) ||
-            !(a[k] = malloc((2 * na[k] + 2) * sizeof *a[k])))
+            !(a[k] = merged_water(in, na[k], &na[k])))
             return 0;
-        na[k] = merge_iv(memcpy(a[k], in->iv, 2 * na[k] * sizeof *a[k]), na[k]);
     }
     return 1;
 }
@@ -881,17 +890,14 @@ static int side_rule(wm_probe *in, wm_pt P, int vertical, int32_t L, int cls0,
      * water a unit across on each side; m: where both are water; x: the
      * edges' parts where they are not */
     const size_t nd = in->ndv;
-    double *w = malloc((2 * *niv + 2) * sizeof *w);
+    size_t nw = 0;
+    double *w = merged_water(in, *niv, &nw);
     double *d = malloc((2 * nd + 2) * sizeof *d), *a[2] = {NULL, NULL};
     double *m = NULL, *x = NULL;
     size_t na[2] = {0, 0};
     int ok = w && d;
     if (ok)
-    {
-        memcpy(w, in->iv, 2 * *niv * sizeof *w);
         memcpy(d, in->dv, 2 * nd * sizeof *d);
-    }
-    const size_t nw = ok ? merge_iv(w, *niv) : 0;
     ok = ok && water_across(in, P, vertical, L, a, na);
     if (ok)
         ok = (m = malloc((2 * (na[0] + na[1]) + 2) * sizeof *m)) != NULL &&
@@ -948,12 +954,9 @@ static int meets(const double *a, size_t na, double lo, double hi)
 static int thin_runs(wm_probe *in, wm_pt P, int vertical, int32_t L,
                      size_t *niv)
 {
-    double *w = malloc((2 * *niv + 2) * sizeof *w), *a[2] = {NULL, NULL};
-    size_t na[2] = {0, 0};
+    size_t na[2] = {0, 0}, nw = 0;
+    double *w = merged_water(in, *niv, &nw), *a[2] = {NULL, NULL};
     int ok = w != NULL, inner = 0;
-    if (ok)
-        memcpy(w, in->iv, 2 * *niv * sizeof *w);
-    const size_t nw = ok ? merge_iv(w, *niv) : 0;
     for (size_t i = 0; i < nw; i++)
         inner |= w[2 * i] > 0 && w[2 * i + 1] < L;
     ok = ok && (!inner || water_across(in, P, vertical, L, a, na));
@@ -993,11 +996,10 @@ static int thin_runs(wm_probe *in, wm_pt P, int vertical, int32_t L,
  * memory. */
 static int settled_ends(wm_probe *in, int32_t L, int at0, int at1, size_t *niv)
 {
-    double *w = malloc((2 * *niv + 2) * sizeof *w);
+    size_t nw = 0;
+    double *w = merged_water(in, *niv, &nw);
     if (!w)
         return 0;
-    memcpy(w, in->iv, 2 * *niv * sizeof *w);
-    const size_t nw = merge_iv(w, *niv);
     double fill[4];
     size_t nf = 0;
     if (at0 && nw > 1 && fabs(w[1]) < WM_COINCIDE && w[2] <= 1.0 + WM_COINCIDE)
