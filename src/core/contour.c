@@ -432,6 +432,7 @@ static wm_status all_segments(state *s, const wm_field *f, wm_probe *probe,
     {
         if (wm_cancelled(ctx))
             return wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+        wm_field_prefetch_tile(f, k + 1);
         if (!tile_segments(s, f, k, hc))
             return nomem(ctx);
     }

@@ -1295,6 +1295,28 @@ void wm_field_prefetch(const wm_field *f, int32_t c, int32_t r)
         __builtin_prefetch(f->val[t] + off);
 }
 
+void wm_field_prefetch_tile(const wm_field *f, size_t k)
+{
+    if (k >= f->mixed)
+        return;
+    const float *v = f->val[f->mixed_tile[k]];
+    const uint64_t *b = wm_field_bits(f, k);
+    for (int32_t j = 0; j < TS1; j++)
+    {
+        /* the near samples of rows j - 1 .. j + 1 */
+        const uint64_t m = b[2 * j + 1] | (j > 0 ? b[2 * j - 1] : 0) |
+                           (j + 1 < TS1 ? b[2 * j + 3] : 0);
+        if (!m)
+            continue;
+        const float *row = v + (ptrdiff_t)j * TS1;
+        const char *p = (const char *)(row + __builtin_ctzll(m));
+        const char *last = (const char *)(row + 63 - __builtin_clzll(m));
+        for (; p < last; p += 64)
+            __builtin_prefetch(p);
+        __builtin_prefetch(last);
+    }
+}
+
 void wm_field_free(wm_field *f)
 {
     if (!f)

@@ -160,6 +160,13 @@ extern "C"
      *  memory latencies overlap. */
     void wm_field_prefetch(const wm_field *f, int32_t c, int32_t r);
 
+    /** Asks the cache for the samples of the k-th MIXED tile that lie in
+     *  or beside a row's span of near ones (|v| < 1), which the screening of
+     *  hidden crossings and the contour read: a caller walking the tiles
+     *  issues it a tile ahead, so that the tile's misses overlap the work
+     *  on the one before. k may be f->mixed (nothing is asked). */
+    void wm_field_prefetch_tile(const wm_field *f, size_t k);
+
     /** Frees what f owns; f may be NULL. */
     void wm_field_free(wm_field *f);
 

@@ -966,6 +966,7 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
             wm_hidden_free(h);
             return wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
         }
+        wm_field_prefetch_tile(f, k + 1);
         if (!screen_tile(h, f, probe, &T))
             goto nomem;
     }
