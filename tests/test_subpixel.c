@@ -431,6 +431,45 @@ static size_t corners_of(const wm_scene *s, wm_pt **c)
     return n;
 }
 
+/* A stream 0.33 px wide along y = 100.87 (banks at 100.705 and 101.035)
+ * between the sample rows 100 and 101: the row above is water by the
+ * stream's near bank only (0.035 px), so the interpolated crossing of the
+ * edges from row 100 sat 0.25 px short of the far bank, within the loose
+ * bound: the stream came out 0.08 px wide. Such a stream (y = 36.87) with
+ * a second one 0.3 px wide above it, rising to y = 37.28 over 8 px, leaves
+ * a land island 3.9 x 0.1 px between them, hidden on the edges from row 37
+ * (water) to 38 (land): three crossings, the middle ones a river crossing
+ * them twice (river_may_hide; held-out round 26, at 0.3 m pixels). */
+static void thin_streams_between_rows(void)
+{
+    wm_scene s;
+    wm_rings r = {0};
+    su_init(&s, 256);
+    const double a[] = {20, 100.87, 230, 100.87};
+    su_river(&s, a, 2, 0.165);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 1, &r), WM_OK, "the stream's block extracts");
+    TAP_OK(vertex_near(&r, 150 * WM_Q, 100.705 * WM_Q, 1.0) &&
+               vertex_near(&r, 150 * WM_Q, 101.035 * WM_Q, 1.0),
+           "both banks exactly on the sample column x = 150");
+    TAP_EQ(ring_meetings(&r), 0, "rings simple and disjoint");
+    wm_rings_free(&r);
+    wm_scene_free(&s);
+
+    su_init(&s, 64);
+    const double a2[] = {20.67, 36.8667, 46.67, 36.8667};
+    const double b[] = {25.67, 36.8667, 33.67, 37.2833, 41.67, 36.8667};
+    su_river(&s, a2, 2, 0.165);
+    su_river(&s, b, 3, 0.15);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 1, &r), WM_OK, "the two streams' block extracts");
+    TAP_EQ(count_sign(&r, 1), 1, "one water ring");
+    TAP_EQ(count_sign(&r, 0), 1, "the island between the streams kept");
+    TAP_EQ(ring_meetings(&r), 0, "rings simple and disjoint");
+    wm_rings_free(&r);
+    wm_scene_free(&s);
+}
+
 /* Whether a corner of c lies within 2 units of (x, y) (pixels). */
 static int has_corner(const wm_pt *c, size_t n, double x, double y)
 {
@@ -791,14 +830,17 @@ int main(void)
     su_lake(&s, pool, &npool, 1);
     su_finish(&s);
     TAP_EQ(wm_probe_init(&p, &s, 0, 0), WM_OK, "probe");
-    TAP_OK(wm_probe_min_radius(&p, 0, 0, 12 * WM_Q, 12 * WM_Q) == 3.0 * WM_Q,
+    TAP_OK(wm_probe_min_radius(&p, 0, 0, 12 * WM_Q, 12 * WM_Q, 1) == 3.0 * WM_Q,
            "least radius near the cap: 3 px");
-    TAP_OK(wm_probe_min_radius(&p, 84 * WM_Q, 84 * WM_Q, 86 * WM_Q,
-                               86 * WM_Q) == 0,
+    TAP_OK(wm_probe_min_radius(&p, 84 * WM_Q, 84 * WM_Q, 86 * WM_Q, 86 * WM_Q,
+                               1) == 0,
            "least radius near the lake: 0");
     TAP_OK(isinf(wm_probe_min_radius(&p, 40 * WM_Q, 100 * WM_Q, 60 * WM_Q,
-                                     120 * WM_Q)),
+                                     120 * WM_Q, 1)),
            "nothing in reach: infinite");
+    TAP_OK(isinf(wm_probe_min_radius(&p, 84 * WM_Q, 84 * WM_Q, 86 * WM_Q,
+                                     86 * WM_Q, 0)),
+           "least river radius near the lake, no river in reach: infinite");
     wm_probe_free(&p);
     TAP_EQ(extract(&s, 1, &r1), WM_OK, "extract with the exact search");
     TAP_OK(vertex_near(&r1, 10.0681 * WM_Q, 10 * WM_Q, 1.0) &&
@@ -817,5 +859,6 @@ int main(void)
     lone_rings_touching();
     dense_bend();
     buried_crossings();
+    thin_streams_between_rows();
     return TAP_DONE();
 }

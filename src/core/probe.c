@@ -1101,13 +1101,13 @@ void wm_probe_lake_edges_ray(const wm_probe *p, double y, wm_probe_items *it)
 }
 
 double wm_probe_min_radius(const wm_probe *p, int32_t x0, int32_t y0,
-                           int32_t x1, int32_t y1)
+                           int32_t x1, int32_t y1, int lakes)
 {
-    if (p->nsegs == 0 && p->npolys == 0)
+    if (p->nsegs == 0 && (p->npolys == 0 || !lakes))
         return INFINITY;
     const int32_t cx0 = dcell(p, x0), cx1 = dcell(p, x1);
     const int32_t cy0 = dcell(p, y0), cy1 = dcell(p, y1);
-    if (p->nledge)
+    if (lakes && p->nledge)
     {
         if (p->nlwide)
             return 0;

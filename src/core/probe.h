@@ -180,13 +180,13 @@ extern "C"
     /**
      * The least radius (lattice units) of the river capsules that may come
      * within reach of the block-local box [x0, x1] x [y0, y1] (inside the
-     * block square), or 0 when a lake edge may (a lake's corners are
-     * sharp); INFINITY when nothing does. Read from the indexes, which
-     * register an item in every cell its reach touches: a lower bound,
-     * never more than the true least radius.
+     * block square), or, with lakes set, 0 when a lake edge may (a lake's
+     * corners are sharp); INFINITY when nothing does. Read from the
+     * indexes, which register an item in every cell its reach touches: a
+     * lower bound, never more than the true least radius.
      */
     double wm_probe_min_radius(const wm_probe *p, int32_t x0, int32_t y0,
-                               int32_t x1, int32_t y1);
+                               int32_t x1, int32_t y1, int lakes);
 
 #ifdef __cplusplus
 }

@@ -19,8 +19,11 @@
  * boundary may meet it (feasible_near/far). An edge of one class with a
  * feasible part "cannot decide" (with |va| + |vb| > 1 pixel it never can). An
  * edge whose samples differ is "loose" when its feasible part reaches more than
- * LOOSE pixel from the interpolated crossing. An edge of land that cannot
- * decide is searched only when a capsule may cross it twice
+ * LOOSE pixel from the interpolated crossing, or when a river capsule may
+ * cross it twice inside its feasible part (river_may_hide: two streams or
+ * a stream and an island narrower than a pixel between the two samples,
+ * three crossings where marching squares draws one). An edge of land that
+ * cannot decide is searched only when a capsule may cross it twice
  * (capsule_may_cross: the squared distance to the capsule's axis along the
  * edge, less t^2, is concave). A saddle cell cannot decide
  * which diagonal the boundary separates. Their crossings are computed
@@ -47,9 +50,10 @@
  * those of a cell holding two or more (crowded_cells); a point on a cell's
  * side is in both cells (cells_holding), since the boundary may turn at it
  * in either. What stays unseen:
- * three crossings on an edge whose samples differ that is not loose, and a
- * feature narrower than the lattice's rounding (block.c drops rings
- * thinner than half a unit, 2A/P).
+ * three crossings that a lake makes on an edge whose samples differ that
+ * is not loose (a lake, or land inside one, narrower than the edge's
+ * feasible part), and a feature narrower than the lattice's rounding
+ * (block.c drops rings thinner than half a unit, 2A/P).
  *
  * Seams: an edge's crossings depend on the inputs only, with every
  * coordinate difference formed in integers, so both blocks sharing an edge
@@ -307,6 +311,34 @@ static int capsule_may_cross(float va, float vb, double r)
     const double t0 = (A - B + 1) / 2; /* where the bound is least */
     const double t = t0 < 0 ? 0 : (t0 > 1 ? 1 : t0);
     return (1 - t) * A + t * B - t * (1 - t) <= r * r;
+}
+
+/* How far from the water end of an edge whose samples differ in class a
+ * river capsule of radius r pixels or more may cross it twice (pixels;
+ * below 0: nowhere), from the value vl of its land end and v2 of the
+ * sample one pixel past it on the edge's line (v2 <= 0: water there, or
+ * none). Three crossings hide on such an edge only so: of the water past
+ * its second crossing, the item holding the part just past it holds
+ * neither end, so it crosses the edge twice, past the first crossing. As in
+ * capsule_may_cross, f(s) = (squared distance from the point s along the
+ * line to the capsule's axis) - s^2 is concave; f(0) >= r^2 (the capsule
+ * does not hold the water end), f(1) >= (vl + r)^2 - 1, f(2) >=
+ * (v2 + r)^2 - 4 where v2 is land, and f(1) >= (f(0) + f(2)) / 2. The
+ * distance falls under r only where s^2 + (1 - s) r^2 + s f(1) < r^2,
+ * that is s < r^2 - f(1). Margins of 1/1000 pixel as there. */
+static double hide_reach(float vl, float v2, double r)
+{
+    if (isinf(r))
+        return -1; /* no river in reach */
+    const double b = vl > 0.001f ? vl - 0.001 : 0;
+    double s = 1 - b * b - 2 * b * r;
+    if (v2 > 0)
+    {
+        const double b2 = v2 > 0.001f ? v2 - 0.001 : 0;
+        const double s2 = (4 - b2 * b2 - 2 * b2 * r) / 2;
+        s = s2 < s ? s2 : s;
+    }
+    return s;
 }
 
 /* Cell (c, r) of key k. */
@@ -826,7 +858,10 @@ typedef struct
     const float *v;
     const uint64_t *bits; /* its rows' water and near bits (wm_field.bits) */
     int32_t c0, r0, c1, r1, n;
-    double rmin; /* least capsule radius in reach, pixels (< 0: not yet) */
+    double rmin; /* least capsule radius in reach, pixels, lakes' 0 (< 0:
+                    not yet) */
+    double rriv; /* least river capsule radius in reach, pixels (< 0: not
+                    yet) */
 } tile;
 
 /* Edge from sample (c0 + q, r) of T along x or y. */
@@ -859,9 +894,32 @@ static int land_may_cross(const wm_probe *probe, tile *T, const edge_view *e)
      * of the point a unit before it: the tile's own index cells do */
     if (T->rmin < 0)
         T->rmin = wm_probe_min_radius(probe, T->c0 * WM_Q, T->r0 * WM_Q,
-                                      T->c1 * WM_Q - 1, T->r1 * WM_Q - 1) /
+                                      T->c1 * WM_Q - 1, T->r1 * WM_Q - 1, 1) /
                   WM_Q;
     return capsule_may_cross(e->a[0], e->a[e->along], T->rmin);
+}
+
+/* Whether the edge e of tile T, whose samples differ in class, may hold
+ * three crossings by a river (hide_reach with the least river radius in
+ * reach of T, against the water end's ball, then the feasible part). */
+static int river_may_hide(const wm_probe *probe, tile *T, const edge_view *e)
+{
+    const int aw = e->a[0] <= 0; /* the water end is a */
+    const float vw = fabsf(aw ? e->a[0] : e->a[e->along]);
+    const float vl = fabsf(aw ? e->a[e->along] : e->a[0]);
+    const int past = aw ? e->after : e->before; /* the tile holds it */
+    const float v2 = !past ? 0 : aw ? e->a[2 * e->along] : e->a[-e->along];
+    if (T->rriv < 0)
+        T->rriv = wm_probe_min_radius(probe, T->c0 * WM_Q, T->r0 * WM_Q,
+                                      T->c1 * WM_Q - 1, T->r1 * WM_Q - 1, 0) /
+                  WM_Q;
+    const double reach = hide_reach(vl, v2, T->rriv);
+    if (vw - 0.001 >= reach)
+        return 0;
+    float L, U;
+    feasible_near(e, &L, &U);
+    feasible_far(e, &L, &U);
+    return (aw ? L : 1.0f - U) - 0.001 < reach;
 }
 
 /* Screens the edges of row r of T at the columns set in m (both samples
@@ -893,10 +951,11 @@ static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe, tile *T,
             continue;
         }
         const int sq = vertical ? c == 0 || c == T->n : r == 0 || r == T->n;
-        if (!sq && sum >= 1.0f - LOOSE)
-            continue;
         const edge_view e = view_of(T, q, r, vertical);
-        if ((sq || loose(&e)) && !loose_edge(h, f, probe, c, r, vertical))
+        if (!sq && !(sum < 1.0f - LOOSE && loose(&e)) &&
+            !river_may_hide(probe, T, &e))
+            continue;
+        if (!loose_edge(h, f, probe, c, r, vertical))
             return 0;
     }
     return 1;
@@ -960,6 +1019,7 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
                   c0 + WM_TILE < n ? c0 + WM_TILE : n,
                   r0 + WM_TILE < n ? r0 + WM_TILE : n,
                   n,
+                  -1,
                   -1};
         if (wm_cancelled(ctx))
         {
