@@ -492,3 +492,34 @@ def test_densified_arcs_keep_their_strip(wm, tmp_path):
     assert fig['ring_diff'] == 0, fig
     assert fig['hausdorff_px'] <= HAUSDORFF_PX, (fig['hausdorff_px'], fig['worst_at'])
     assert sum(len(oracle.polygons_of(g)) for g in orc.values()) == len(res.water)
+
+
+def test_self_crossing_lake_touches_itself(wm, tmp_path):
+    """A lake ring of 12 vertices crossing itself within 2 x 2 m (QA round
+    of 2026-11-28, reduced from one of 200 random vertices): two of its
+    crossings round to one lattice point of an ambiguous cell's dividing
+    segment, where the boundary touches itself, two segments in and two
+    out. Both ins were linked to the first out found and the block failed
+    with "a chain ends inside the block"; each in now goes on to the first
+    out clockwise from it (contour.c takes_before), and the rings touch
+    there without crossing."""
+    from osgeo import ogr
+    import scenes
+    px, B = PIXEL_SIZE, BLOCK_SIZE
+    ring = [(500000.201407204, 4700000.07720826), (500001.403898953, 4700000.91286124),
+            (500001.184124022, 4700001.53176663), (500000.814388717, 4700000.39233982),
+            (500000.779190569, 4700000.73207811), (500001.046961576, 4700000.01357093),
+            (500000.210960954, 4700000.00637354), (500001.81368004, 4700001.34180863),
+            (500001.197766404, 4700000.87173829), (500000.462804591, 4700000.13075474),
+            (500000.607978254, 4700000.73057041), (500001.239170741, 4700000.26023769)]
+    wkt = 'POLYGON ((%s))' % ','.join('%.9f %.8f' % p for p in ring + ring[:1])
+    path = str(tmp_path / 'lake.gpkg')
+    scenes.write_layer(path, 'lakes', ogr.wkbPolygon, adversarial.EPSG, [{'geom': wkt}])
+    options = {'LAKES': path, 'LAKES_LAYER': 'lakes', 'PIXEL_SIZE': px, 'BLOCK_SIZE': B,
+               'SIMPLIFY': 0, 'NUM_THREADS': 1}
+    res = wm.run(options)
+    assert all(f.geom.is_valid for f in res.water)
+    orc = oracle.oracle_blocks(oracle.inputs_from_options(options), B)
+    fig, _ = adversarial.measure(res.water, orc, B, px)
+    assert fig['hausdorff_px'] <= HAUSDORFF_PX, (fig['hausdorff_px'], fig['worst_at'])
+    assert fig['specks_outer'] == 0 and fig['specks_hole'] == 0, fig['speck_at']

@@ -443,6 +443,38 @@ static wm_status all_segments(state *s, const wm_field *f, wm_probe *probe,
     return s->nsegs < NO_SEG ? WM_OK : nomem(ctx); /* links: 32 bits */
 }
 
+/* Whether the direction v lies before w turning clockwise from ref (all
+ * three nonzero lattice vectors; ref itself comes last). */
+static int cw_before(int64_t rx, int64_t ry, int64_t vx, int64_t vy, int64_t wx,
+                     int64_t wy)
+{
+    /* half 0: clockwise of ref by (0, pi], half 1: by (pi, 2 pi] */
+    const int64_t cv = rx * vy - ry * vx, cw = rx * wy - ry * wx;
+    const int hv = cv > 0 || (cv == 0 && rx * vx + ry * vy > 0);
+    const int hw = cw > 0 || (cw == 0 && rx * wx + ry * wy > 0);
+    if (hv != hw)
+        return hv < hw;
+    return vx * wy - vy * wx < 0;
+}
+
+/* Whether segment j, rather than k, follows segment i, all three meeting
+ * at i's out point: a point where the boundary touches itself (two
+ * crossings rounded to one point of a dividing segment) has two segments
+ * in and two out, and each in goes on along the water on its left, to the
+ * first out clockwise from it, so the rings touch there and never cross. A
+ * segment already taken comes after one that is not. */
+static int takes_before(const state *s, size_t i, size_t j, size_t k)
+{
+    const seg *g = &s->segs[i], *a = &s->segs[j], *b = &s->segs[k];
+    const int ta = (a->flags & HAS_PRED) != 0, tb = (b->flags & HAS_PRED) != 0;
+    if (ta != tb)
+        return ta < tb;
+    return cw_before(
+        (int64_t)g->in_pt.x - g->out_pt.x, (int64_t)g->in_pt.y - g->out_pt.y,
+        (int64_t)a->out_pt.x - a->in_pt.x, (int64_t)a->out_pt.y - a->in_pt.y,
+        (int64_t)b->out_pt.x - b->in_pt.x, (int64_t)b->out_pt.y - b->in_pt.y);
+}
+
 /* Step 2b: links the segments of bnd[0 .. nbnd) whose out edge crosses
  * into another tile (or an ambiguous cell) to the one whose in edge is the
  * same crossing, through an open-addressing hash; 0 when out of memory. */
@@ -472,16 +504,16 @@ static int link_across(state *s, const size_t *bnd, size_t nbnd)
         if (!crosses_tile(s, i, 0))
             continue;
         const uint64_t key = pt_key(s->segs[i].out_pt);
-        size_t h = hash64(key, hcap - 1);
-        while (slot[h] != SIZE_MAX)
+        size_t best = SIZE_MAX;
+        for (size_t h = hash64(key, hcap - 1); slot[h] != SIZE_MAX;
+             h = (h + 1) & (hcap - 1))
+            if (pt_key(s->segs[slot[h]].in_pt) == key &&
+                (best == SIZE_MAX || takes_before(s, i, slot[h], best)))
+                best = slot[h];
+        if (best != SIZE_MAX)
         {
-            if (pt_key(s->segs[slot[h]].in_pt) == key)
-            {
-                s->segs[i].next = (uint32_t)slot[h];
-                s->segs[slot[h]].flags |= HAS_PRED;
-                break;
-            }
-            h = (h + 1) & (hcap - 1);
+            s->segs[i].next = (uint32_t)best;
+            s->segs[best].flags |= HAS_PRED;
         }
     }
     free(slot);
