@@ -470,6 +470,51 @@ static void thin_streams_between_rows(void)
     wm_scene_free(&s);
 }
 
+static int count_segment(void *user, wm_pt a, wm_pt b)
+{
+    (void)a;
+    (void)b;
+    (*(size_t *)user)++;
+    return 1;
+}
+
+/* The subdivision of the ambiguous cells stops when asked (a dense shore
+ * gives a block thousands of them, each subdivided deep: a saw-toothed lake
+ * of 60,000 vertices ran on for a minute after SIGINT). */
+static void hidden_cells_cancel(void)
+{
+    wm_scene s;
+    su_init(&s, 256);
+    const double a[] = {20, 100.87, 230, 100.87};
+    const double b[] = {120, 100.87, 150, 101.3, 180, 100.87};
+    su_river(&s, a, 2, 0.165);
+    su_river(&s, b, 3, 0.15);
+    su_finish(&s);
+    wm_field f;
+    wm_probe p;
+    wm_hidden h;
+    int cancel = 0;
+    const wm_ctx ctx = {NULL, NULL, &cancel};
+    TAP_EQ(wm_field_compute(&s, 0, 0, s.n + 1, s.n + 1, NULL, &f, NULL), WM_OK,
+           "field");
+    TAP_EQ(wm_probe_init(&p, &s, 0, 0), WM_OK, "probe");
+    TAP_EQ(wm_hidden_find(&f, &p, &h, &ctx), WM_OK, "hidden crossings");
+    TAP_OK(h.ncell > 0, "ambiguous cells: %zu", h.ncell);
+    size_t nseg = 0;
+    TAP_EQ(wm_hidden_cells(&f, &p, &h, count_segment, &nseg, &ctx), WM_OK,
+           "subdivided");
+    TAP_OK(nseg > 0, "segments: %zu", nseg);
+    cancel = 1;
+    nseg = 0;
+    TAP_EQ(wm_hidden_cells(&f, &p, &h, count_segment, &nseg, &ctx),
+           WM_ERR_CANCELLED, "asked to stop: cancelled");
+    TAP_EQ(nseg, 0, "before any cell");
+    wm_hidden_free(&h);
+    wm_probe_free(&p);
+    wm_field_free(&f);
+    wm_scene_free(&s);
+}
+
 /* Whether a corner of c lies within 2 units of (x, y) (pixels). */
 static int has_corner(const wm_pt *c, size_t n, double x, double y)
 {
@@ -860,5 +905,6 @@ int main(void)
     dense_bend();
     buried_crossings();
     thin_streams_between_rows();
+    hidden_cells_cancel();
     return TAP_DONE();
 }

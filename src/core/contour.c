@@ -437,9 +437,10 @@ static wm_status all_segments(state *s, const wm_field *f, wm_probe *probe,
             return nomem(ctx);
     }
     *ntileseg = s->nsegs;
-    if (s->hid.ncell &&
-        wm_hidden_cells(f, probe, &s->hid, push_ambiguous, s) != WM_OK)
-        return nomem(ctx);
+    if (s->hid.ncell && (st = wm_hidden_cells(f, probe, &s->hid, push_ambiguous,
+                                              s, ctx)) != WM_OK)
+        return st == WM_ERR_CANCELLED ? wm_fail(ctx, st, "cancelled")
+                                      : nomem(ctx);
     return s->nsegs < NO_SEG ? WM_OK : nomem(ctx); /* links: 32 bits */
 }
 

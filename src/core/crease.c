@@ -835,11 +835,12 @@ static int insert_points(wm_rings *rings, insertion *ins, size_t nins)
  * the sorted keys of the hot cells next to the corners the previous pass
  * inserted, only those in them), updates their states and rebuilds the
  * rings with the accepted corners; *ninserted says how many. *newhot
- * receives this pass's hot cells (*nnewhot keys, caller frees). */
+ * receives this pass's hot cells (*nnewhot keys, caller frees). Returns
+ * WM_ERR_CANCELLED when ctx asks to stop (checked every 256 corners). */
 static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
                              size_t ncs, const uint64_t *hot, size_t nhot,
                              uint64_t **newhot, size_t *nnewhot,
-                             size_t *ninserted)
+                             size_t *ninserted, const wm_ctx *ctx)
 {
     const int32_t S = in->s->n * WM_Q;
     *ninserted = 0;
@@ -868,9 +869,14 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
     /* the grid owns active */
     int ok = active && build_ringgrid(&g, rings, S, cell, active) == WM_OK &&
              (pi.split = calloc(rings->npts + 1, 1)) != NULL;
+    int cancelled = 0;
     for (size_t q = 0; ok && q < ntodo; q++)
+    {
+        if (q % 256 == 0 && (cancelled = wm_cancelled(ctx)) != 0)
+            break;
         ok = place_corner(in, &g, &cs[todo[q]], &pi) == 0;
-    if (ok && pi.n > 0)
+    }
+    if (ok && !cancelled && pi.n > 0)
     {
         ok = hot_cells(pi.ins, pi.n, newhot, nnewhot) &&
              reopen_cut(&g, pi.ins, pi.n, cs, ncs) &&
@@ -882,7 +888,7 @@ static wm_status insert_pass(wm_probe *in, wm_rings *rings, corner *cs,
     free(pi.split);
     free(todo);
     free_ringgrid(&g);
-    return ok ? WM_OK : WM_ERR_NOMEM;
+    return cancelled ? WM_ERR_CANCELLED : ok ? WM_OK : WM_ERR_NOMEM;
 }
 
 wm_status wm_crease_recover(const wm_scene *s, const wm_field *f, int64_t bx,
@@ -948,13 +954,18 @@ wm_status wm_crease_recover_probed(wm_probe *probe, const wm_field *f,
         size_t n = 0, nnext = 0;
         uint64_t *next = NULL;
         st = insert_pass(in, rings, cs, ncand, pass ? hot : NULL, nhot, &next,
-                         &nnext, &n);
+                         &nnext, &n, ctx);
         free(hot);
         hot = next;
         nhot = nnext;
         if (st != WM_OK)
         {
             free(hot);
+            if (st == WM_ERR_CANCELLED)
+            {
+                st = wm_fail(ctx, st, "cancelled");
+                goto cleanup;
+            }
             goto nomem;
         }
         if (n == 0)

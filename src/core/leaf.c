@@ -563,21 +563,29 @@ static int holds_edge(const item *t, uint32_t e)
 }
 
 /* Adds the lake polygons meeting R; 0 when one is beyond this reading or
- * there are too many. */
+ * there are too many (or out of memory). Each polygon once: its edges
+ * near R may be thousands (a dense shore), its polygons few, so they are
+ * looked up among the polygons seen, not among the edges before. */
 static int gather_lakes(leaf *l)
 {
     wm_probe_lake_edges_near(l->p, l->x0 + l->W / 2.0, l->y0 + l->H / 2.0,
                              &l->le);
-    for (size_t j = 0; j < l->le.na + l->le.nb; j++)
+    uint32_t *seen = NULL;
+    size_t nseen = 0, cap = 0;
+    int ok = 1;
+    for (size_t j = 0; ok && j < l->le.na + l->le.nb; j++)
     {
         const uint32_t k = near_edge(l, j)->k;
-        int seen = 0;
-        for (size_t i = 0; i < j && !seen; i++)
-            seen = near_edge(l, i)->k == k;
-        if (!seen && !add_lake(l, k))
-            return 0;
+        size_t i = 0;
+        while (i < nseen && seen[i] != k)
+            i++;
+        if (i < nseen)
+            continue;
+        ok = wm_push((void **)&seen, &nseen, &cap, &k, sizeof k) &&
+             add_lake(l, k);
     }
-    return 1;
+    free(seen);
+    return ok;
 }
 
 static int find(leaf *l, int i)

@@ -1038,6 +1038,11 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
     }
     if (!add_seeds(h, f, probe) || !exact_sides(h, f, probe))
         goto nomem;
+    if (wm_cancelled(ctx))
+    {
+        wm_hidden_free(h);
+        return wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
+    }
     if (h->ncell == 0 && h->nedge == 0)
         return WM_OK; /* nothing hidden */
     if (h->nedge > 1)
@@ -2017,10 +2022,13 @@ static int hidden_cell(const wm_field *f, wm_probe *probe, const wm_hidden *h,
 }
 
 wm_status wm_hidden_cells(const wm_field *f, wm_probe *probe,
-                          const wm_hidden *h, wm_segment_fn emit, void *user)
+                          const wm_hidden *h, wm_segment_fn emit, void *user,
+                          const wm_ctx *ctx)
 {
     for (size_t i = 0; i < h->ncell; i++)
     {
+        if (wm_cancelled(ctx))
+            return WM_ERR_CANCELLED;
         int32_t c, r;
         cell_of(f, h->cell[i], &c, &r);
         if (!hidden_cell(f, probe, h, c, r, emit, user))

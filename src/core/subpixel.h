@@ -107,11 +107,12 @@ extern "C"
      * no seed, or is 3-5 lattice units wide.
      * Segments end on crossings (shared with the neighbouring cells) or on
      * points inside the cell; they are simple and meet only at their ends.
-     * Returns WM_OK, or WM_ERR_NOMEM.
+     * Returns WM_OK, WM_ERR_NOMEM, or WM_ERR_CANCELLED (ctx asked to stop;
+     * checked before each cell).
      */
     wm_status wm_hidden_cells(const wm_field *f, wm_probe *probe,
                               const wm_hidden *h, wm_segment_fn emit,
-                              void *user);
+                              void *user, const wm_ctx *ctx);
 
 #ifdef __cplusplus
 }
