@@ -23,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 static void usage(int code)
@@ -606,6 +607,48 @@ static int run_options(const cli *c, char ***all)
     return ok;
 }
 
+/* Whether paths a and b name one existing file (or folder). */
+static int same_file(const char *a, const char *b)
+{
+    struct stat sa, sb;
+    return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev &&
+           sa.st_ino == sb.st_ino;
+}
+
+/* Refuses destinations the run cannot write in place of (before any
+ * work): one on a GDAL virtual file system (/vsistdout/, /vsimem/, ...:
+ * the output is written beside the destination and moved there, and
+ * /vsistdout/ has no beside; /vsimem/ would vanish with the process), and
+ * a target that is one of the inputs (as ogr2ogr refuses). */
+static int destination_usable(const char *dst, const char *const targets[2],
+                              char **all)
+{
+    if (STARTS_WITH_CI(dst, "/vsi"))
+    {
+        CPLError(CE_Failure, CPLE_NotSupported,
+                 "gdal_watermesh: %s is on a GDAL virtual file system; the "
+                 "output is written beside its destination and moved into "
+                 "place, which needs a file or folder on disk.",
+                 dst);
+        return FALSE;
+    }
+    static const char *const inputs[] = {"RIVERS", "LAKES"};
+    for (int t = 0; t < 2 && targets[t]; t++)
+        for (int i = 0; i < 2; i++)
+        {
+            const char *in = CSLFetchNameValue(all, inputs[i]);
+            if (in && same_file(in, targets[t]))
+            {
+                CPLError(CE_Failure, CPLE_AppDefined,
+                         "gdal_watermesh: the destination %s is the %s "
+                         "input; write to another file.",
+                         targets[t], inputs[i]);
+                return FALSE;
+            }
+        }
+    return TRUE;
+}
+
 /* Refuses targets that exist without -overwrite (before any work). */
 static int targets_free(const char *const targets[2], int overwrite)
 {
@@ -700,7 +743,9 @@ static int run(const cli *c, char **all)
         water_dst = CPLStrdup(c->dst);
     const char *const targets[2] = {water_dst, mesh_dst};
     int rc = 1;
-    if (c->resume && done_before(targets, c->quiet))
+    if (!destination_usable(c->dst, targets, all))
+        rc = 1;
+    else if (c->resume && done_before(targets, c->quiet))
         rc = 0;
     else if (targets_free(targets, c->overwrite))
     {

@@ -174,7 +174,14 @@ def _to_shapely_parts(g, ct, want):
     if ct is not None:
         assert g.Transform(ct) == 0, 'oracle: reprojection failed'
     s = shapely_wkb.loads(bytes(g.ExportToIsoWkb()))
-    parts = list(s.geoms) if hasattr(s, 'geoms') else [s]
+    parts, flat = [s], []
+    while parts:  # collections flattened, nested ones too
+        p = parts.pop(0)
+        if hasattr(p, 'geoms'):
+            parts[:0] = list(p.geoms)
+        else:
+            flat.append(p)
+    parts = flat
     out = []
     for p in parts:
         if p.is_empty:

@@ -366,7 +366,7 @@ def _o(dx, dy):
 def make_odd_scene(path, kind):
     """Writes a small scene exercising one odd-but-valid input `kind`:
     'empty_geometries', 'null_geometries', 'multilinestring', 'multipolygon',
-    'zm', 'curves', 'duplicate_collinear', 'zero_length', 'bowtie',
+    'collections', 'zm', 'curves', 'duplicate_collinear', 'zero_length', 'bowtie',
     'overlapping_lakes', 'far_coordinates'. Returns path. The scene always has
     a normal river and lake besides, so the output is never empty."""
     if os.path.exists(path):
@@ -400,6 +400,15 @@ def make_odd_scene(path, kind):
             _o(100, 50), _o(250, 50), _o(250, 150), _o(100, 150), _o(100, 50),
             _o(150, 80), _o(150, 120), _o(200, 120), _o(200, 80), _o(150, 80),
             _o(400, 50), _o(500, 60), _o(450, 150), _o(400, 50)), 'name': 'multi'}]
+    elif kind == 'collections':  # nested, and of Multi* members
+        rtype, ltype = ogr.wkbGeometryCollection, ogr.wkbGeometryCollection
+        rivers = [{'geom': 'GEOMETRYCOLLECTION (MULTILINESTRING ((%s, %s, %s)))' % (
+            _o(50, 300), _o(300, 320), _o(550, 300)), 'width': 15.0, 'name': 'gc_multi'},
+            {'geom': 'GEOMETRYCOLLECTION (GEOMETRYCOLLECTION (LINESTRING (%s, %s)))' % (
+                _o(300, 320), _o(350, 500)), 'width': 15.0, 'name': 'gc_gc'}]
+        lakes = [{'geom': 'GEOMETRYCOLLECTION (MULTIPOLYGON (((%s, %s, %s, %s, %s))), POLYGON ((%s, %s, %s, %s)))' % (
+            _o(100, 50), _o(250, 50), _o(250, 150), _o(100, 150), _o(100, 50),
+            _o(400, 50), _o(500, 60), _o(450, 150), _o(400, 50)), 'name': 'gc_multi'}]
     elif kind == 'zm':
         rtype, ltype = ogr.wkbLineStringZM, ogr.wkbPolygonZM
         rivers = [{'geom': 'LINESTRING ZM (%s 100 1, %s 120 2, %s 90 3)' % (
@@ -456,7 +465,7 @@ def make_odd_scene(path, kind):
 
 
 ODD_KINDS = ('empty_geometries', 'null_geometries', 'multilinestring', 'multipolygon',
-             'zm', 'curves', 'duplicate_collinear', 'zero_length', 'bowtie',
+             'collections', 'zm', 'curves', 'duplicate_collinear', 'zero_length', 'bowtie',
              'overlapping_lakes', 'far_coordinates')
 
 

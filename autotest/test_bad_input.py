@@ -386,3 +386,48 @@ def test_absurd_width_field_value_falls_back(wm, tmp_dir):
     a = oracle.total_area(res.water)
     assert abs(a - (100 * 10 + 3.14159 * 25)) < 0.03 * a, a
     assert "1 feature" in res.cap.text, res.cap.text
+
+
+def test_cli_refuses_virtual_destination(wm, tmp_dir, simple_scene):
+    """The output is written beside its destination and moved into place:
+    /vsistdout/ has no beside (it left /vsistdout_water and _mesh in the
+    root folder, exit 0), /vsimem/ vanishes with the process."""
+    for dst, fmt in (('/vsistdout/', 'GeoJSON'), ('/vsimem/out.gpkg', 'GPKG')):
+        p = wm.cli(['-rivers', simple_scene, '-rivers_layer', 'rivers', '-of', fmt, dst],
+                   cwd=tmp_dir)
+        assert p.returncode != 0, (dst, p.stdout)
+        assert 'virtual file system' in p.stderr, p.stderr
+    assert not os.path.exists('/vsistdout_water') and not os.path.exists('/vsistdout')
+    assert os.listdir(tmp_dir) == [], os.listdir(tmp_dir)
+
+
+def test_cli_refuses_its_own_input(wm, tmp_dir, simple_scene):
+    """A destination that is an input is refused before any work (it was
+    replaced by the output, exit 0); the input stays as it was."""
+    import shutil
+    src = os.path.join(tmp_dir, 'scene.gpkg')
+    shutil.copy(simple_scene, src)
+    with open(src, 'rb') as f:
+        before = f.read()
+    p = wm.cli(['-rivers', src, '-rivers_layer', 'rivers', '-overwrite', src])
+    assert p.returncode != 0, p.stdout
+    assert 'is the RIVERS input' in p.stderr, p.stderr
+    with open(src, 'rb') as f:
+        assert f.read() == before
+
+
+def test_collection_member_named(wm, tmp_dir):
+    """Collections are read member by member, nested ones too; a member of
+    another kind is refused by name."""
+    path = os.path.join(tmp_dir, 'gc.gpkg')
+    x, y = scenes.xy(100, 100)
+    scenes.write_layer(path, 'rivers', ogr.wkbGeometryCollection, scenes.SCENE_EPSG,
+                       [{'geom': 'GEOMETRYCOLLECTION (GEOMETRYCOLLECTION (POINT (%f %f)), '
+                                 'LINESTRING (%f %f, %f %f))' % (x, y, x, y, x + 50, y),
+                         'width': 5.0}], fields=[('width', 'Real')])
+    out = os.path.join(tmp_dir, 'out')
+    os.mkdir(out)
+    p = wm.cli(['-rivers', path, '-rivers_layer', 'rivers', os.path.join(out, 'o.gpkg')])
+    assert p.returncode != 0, p.stdout
+    assert 'a Point member; rivers must be lines' in p.stderr, p.stderr
+    assert os.listdir(out) == []

@@ -912,10 +912,11 @@ static int add_river_line(builder *b, OGRGeometryH part, const feat_ctx *fc,
     return TRUE;
 }
 
-/* Adds river feature geometry g (a line string, or a collection of them),
- * width w (m); reports any other member. */
-static int add_river(builder *b, OGRGeometryH g, const feat_ctx *fc, double w,
-                     size_t *nvert)
+/* Adds river feature geometry g (a line string, or a collection of them,
+ * nested or not), width w (m); reports any other geometry, naming it as a
+ * member (depth > 0) or the feature's. */
+static int add_river_geom(builder *b, OGRGeometryH g, const feat_ctx *fc,
+                          double w, size_t *nvert, int depth)
 {
     const OGRwkbGeometryType t = wkbFlatten(OGR_G_GetGeometryType(g));
     if (t == wkbLineString)
@@ -924,26 +925,22 @@ static int add_river(builder *b, OGRGeometryH g, const feat_ctx *fc, double w,
     {
         CPLError(CE_Failure, CPLE_AppDefined,
                  "WATERMESH: RIVERS layer '%s', feature " CPL_FRMT_GIB
-                 ": %s geometry; rivers must be lines.",
-                 OGR_L_GetName(fc->layer), fc->fid, OGRGeometryTypeToName(t));
+                 ": %s%s%s; rivers must be lines.",
+                 OGR_L_GetName(fc->layer), fc->fid, depth ? "a " : "",
+                 OGRGeometryTypeToName(t), depth ? " member" : " geometry");
         return FALSE;
     }
     for (int k = 0; k < OGR_G_GetGeometryCount(g); k++)
-    {
-        OGRGeometryH part = OGR_G_GetGeometryRef(g, k);
-        if (wkbFlatten(OGR_G_GetGeometryType(part)) != wkbLineString)
-        {
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "WATERMESH: RIVERS layer '%s', feature " CPL_FRMT_GIB
-                     ": a %s member; rivers must be lines.",
-                     OGR_L_GetName(fc->layer), fc->fid,
-                     OGRGeometryTypeToName(OGR_G_GetGeometryType(part)));
+        if (!add_river_geom(b, OGR_G_GetGeometryRef(g, k), fc, w, nvert,
+                            depth + 1))
             return FALSE;
-        }
-        if (!add_river_line(b, part, fc, w, nvert))
-            return FALSE;
-    }
     return TRUE;
+}
+
+static int add_river(builder *b, OGRGeometryH g, const feat_ctx *fc, double w,
+                     size_t *nvert)
+{
+    return add_river_geom(b, g, fc, w, nvert, 0);
 }
 
 /* The warnings of a RIVERS layer read: rivers of zero length skipped, and
@@ -1048,6 +1045,34 @@ static int read_polygon(builder *b, OGRGeometryH poly, const feat_ctx *fc)
     return TRUE;
 }
 
+/* Adds lake feature geometry g (a polygon, or a collection of them,
+ * nested or not); reports any other geometry, naming it as a member
+ * (depth > 0) or the feature's. */
+static int add_lake_geom(builder *b, OGRGeometryH g, const feat_ctx *fc,
+                         size_t *nvert, int depth)
+{
+    const OGRwkbGeometryType t = wkbFlatten(OGR_G_GetGeometryType(g));
+    if (t == wkbPolygon)
+    {
+        for (int i = 0; i < OGR_G_GetGeometryCount(g); i++)
+            *nvert += (size_t)OGR_G_GetPointCount(OGR_G_GetGeometryRef(g, i));
+        return read_polygon(b, g, fc);
+    }
+    if (t != wkbMultiPolygon && t != wkbGeometryCollection)
+    {
+        CPLError(CE_Failure, CPLE_AppDefined,
+                 "WATERMESH: LAKES layer '%s', feature " CPL_FRMT_GIB
+                 ": %s%s%s; lakes must be polygons.",
+                 OGR_L_GetName(fc->layer), fc->fid, depth ? "a " : "",
+                 OGRGeometryTypeToName(t), depth ? " member" : " geometry");
+        return FALSE;
+    }
+    for (int k = 0; k < OGR_G_GetGeometryCount(g); k++)
+        if (!add_lake_geom(b, OGR_G_GetGeometryRef(g, k), fc, nvert, depth + 1))
+            return FALSE;
+    return TRUE;
+}
+
 static int read_lakes(builder *b, OGRLayerH h, double unit,
                       OGRSpatialReferenceH dst, size_t *nvert)
 {
@@ -1078,44 +1103,7 @@ static int read_lakes(builder *b, OGRLayerH h, double unit,
             continue;
         }
         OGRGeometryH g = linear(g0);
-        const OGRwkbGeometryType t = wkbFlatten(OGR_G_GetGeometryType(g));
-        if (t == wkbPolygon)
-        {
-            for (int i = 0; i < OGR_G_GetGeometryCount(g); i++)
-                *nvert +=
-                    (size_t)OGR_G_GetPointCount(OGR_G_GetGeometryRef(g, i));
-            ok = read_polygon(b, g, &fc);
-        }
-        else if (t == wkbMultiPolygon || t == wkbGeometryCollection)
-        {
-            for (int k = 0; ok && k < OGR_G_GetGeometryCount(g); k++)
-            {
-                OGRGeometryH part = OGR_G_GetGeometryRef(g, k);
-                if (wkbFlatten(OGR_G_GetGeometryType(part)) != wkbPolygon)
-                {
-                    CPLError(
-                        CE_Failure, CPLE_AppDefined,
-                        "WATERMESH: LAKES layer '%s', feature " CPL_FRMT_GIB
-                        ": a %s member; lakes must be polygons.",
-                        OGR_L_GetName(h), fc.fid,
-                        OGRGeometryTypeToName(OGR_G_GetGeometryType(part)));
-                    ok = FALSE;
-                    break;
-                }
-                for (int i = 0; i < OGR_G_GetGeometryCount(part); i++)
-                    *nvert += (size_t)OGR_G_GetPointCount(
-                        OGR_G_GetGeometryRef(part, i));
-                ok = read_polygon(b, part, &fc);
-            }
-        }
-        else
-        {
-            CPLError(CE_Failure, CPLE_AppDefined,
-                     "WATERMESH: LAKES layer '%s', feature " CPL_FRMT_GIB
-                     ": %s geometry; lakes must be polygons.",
-                     OGR_L_GetName(h), fc.fid, OGRGeometryTypeToName(t));
-            ok = FALSE;
-        }
+        ok = add_lake_geom(b, g, &fc, nvert, 0);
         OGR_G_DestroyGeometry(g);
         OGR_F_Destroy(f);
     }
