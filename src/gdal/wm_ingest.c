@@ -912,6 +912,18 @@ static int add_river_line(builder *b, OGRGeometryH part, const feat_ctx *fc,
     return TRUE;
 }
 
+/* Reports a geometry of type t that the feature of fc may not hold, as a
+ * member (depth > 0) or as the feature's; FALSE. */
+static int refuse_geom(const feat_ctx *fc, OGRwkbGeometryType t, int depth,
+                       const char *rule)
+{
+    CPLError(CE_Failure, CPLE_AppDefined,
+             "WATERMESH: %s layer '%s', feature " CPL_FRMT_GIB ": %s%s%s; %s.",
+             fc->role, OGR_L_GetName(fc->layer), fc->fid, depth ? "a " : "",
+             OGRGeometryTypeToName(t), depth ? " member" : " geometry", rule);
+    return FALSE;
+}
+
 /* Adds river feature geometry g (a line string, or a collection of them,
  * nested or not), width w (m); reports any other geometry, naming it as a
  * member (depth > 0) or the feature's. */
@@ -922,14 +934,7 @@ static int add_river_geom(builder *b, OGRGeometryH g, const feat_ctx *fc,
     if (t == wkbLineString)
         return add_river_line(b, g, fc, w, nvert);
     if (t != wkbMultiLineString && t != wkbGeometryCollection)
-    {
-        CPLError(CE_Failure, CPLE_AppDefined,
-                 "WATERMESH: RIVERS layer '%s', feature " CPL_FRMT_GIB
-                 ": %s%s%s; rivers must be lines.",
-                 OGR_L_GetName(fc->layer), fc->fid, depth ? "a " : "",
-                 OGRGeometryTypeToName(t), depth ? " member" : " geometry");
-        return FALSE;
-    }
+        return refuse_geom(fc, t, depth, "rivers must be lines");
     for (int k = 0; k < OGR_G_GetGeometryCount(g); k++)
         if (!add_river_geom(b, OGR_G_GetGeometryRef(g, k), fc, w, nvert,
                             depth + 1))
@@ -1059,14 +1064,7 @@ static int add_lake_geom(builder *b, OGRGeometryH g, const feat_ctx *fc,
         return read_polygon(b, g, fc);
     }
     if (t != wkbMultiPolygon && t != wkbGeometryCollection)
-    {
-        CPLError(CE_Failure, CPLE_AppDefined,
-                 "WATERMESH: LAKES layer '%s', feature " CPL_FRMT_GIB
-                 ": %s%s%s; lakes must be polygons.",
-                 OGR_L_GetName(fc->layer), fc->fid, depth ? "a " : "",
-                 OGRGeometryTypeToName(t), depth ? " member" : " geometry");
-        return FALSE;
-    }
+        return refuse_geom(fc, t, depth, "lakes must be polygons");
     for (int k = 0; k < OGR_G_GetGeometryCount(g); k++)
         if (!add_lake_geom(b, OGR_G_GetGeometryRef(g, k), fc, nvert, depth + 1))
             return FALSE;
