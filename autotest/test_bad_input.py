@@ -431,3 +431,15 @@ def test_collection_member_named(wm, tmp_dir):
     assert p.returncode != 0, p.stdout
     assert 'a Point member; rivers must be lines' in p.stderr, p.stderr
     assert os.listdir(out) == []
+
+
+def test_river_narrower_than_the_lattice_skipped(wm, tmp_dir, simple_scene):
+    """A river narrower than a lattice unit (PIXEL_SIZE / 256) has no area
+    the lattice can hold: its capsules left rounding specks (27 rings on
+    L3 at WIDTH=1e-300). It is skipped, with a warning."""
+    out = os.path.join(tmp_dir, 'o.gpkg')
+    p = wm.cli(['-rivers', simple_scene, '-rivers_layer', 'rivers', '-width', '1e-6',
+                '-pixel_size', '0.5', out])
+    assert p.returncode == 0, p.stderr
+    assert 'narrower than the lattice' in p.stderr, p.stderr
+    assert len(wm.read_output(out)['water']) == 0

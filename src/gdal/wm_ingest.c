@@ -948,16 +948,22 @@ static int add_river(builder *b, OGRGeometryH g, const feat_ctx *fc, double w,
     return add_river_geom(b, g, fc, w, nvert, 0);
 }
 
-/* The warnings of a RIVERS layer read: rivers of zero length skipped, and
- * features whose width field could not be used. */
+/* The warnings of a RIVERS layer read: rivers of zero length or narrower
+ * than the lattice skipped, and features whose width field could not be
+ * used. */
 static void warn_rivers(OGRLayerH h, const WMParams *p, size_t zero,
-                        size_t badw)
+                        size_t narrow, size_t badw)
 {
     if (zero)
         CPLError(CE_Warning, CPLE_AppDefined,
                  "WATERMESH: RIVERS layer '%s': %lu river(s) of zero length "
                  "skipped.",
                  OGR_L_GetName(h), (unsigned long)zero);
+    if (narrow)
+        CPLError(CE_Warning, CPLE_AppDefined,
+                 "WATERMESH: RIVERS layer '%s': %lu river(s) narrower than "
+                 "the lattice (PIXEL_SIZE / 256) skipped.",
+                 OGR_L_GetName(h), (unsigned long)narrow);
     if (badw)
         CPLError(CE_Warning, CPLE_AppDefined,
                  "WATERMESH: RIVERS layer '%s': %lu feature(s) with a NULL, "
@@ -974,7 +980,7 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
 {
     feat_ctx fc = {"RIVERS", h, 0, unit, NULL};
     int ok = TRUE;
-    size_t zero = 0, badw = 0;
+    size_t zero = 0, narrow = 0, badw = 0;
     attr_ref wf = {-1, NULL, OFTString}, cf = {-1, NULL, OFTString};
     if (!river_layer_type_ok(h) ||
         (p->width_field &&
@@ -995,6 +1001,12 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
             const double w = river_width(f, p, &wf, &cf, &source);
             wsrc[source]++;
             badw += wf.field >= 0 && source != 0;
+            if (w < fc.unit)
+            { /* below the lattice: its rings would be rounding specks */
+                narrow++;
+                OGR_F_Destroy(f);
+                continue;
+            }
             OGRGeometryH g = linear(g0);
             const size_t before = b->nsegs;
             ok = add_river(b, g, &fc, w, nvert);
@@ -1006,7 +1018,7 @@ static int read_rivers(builder *b, OGRLayerH h, const WMParams *p, double unit,
     if (fc.ct)
         OCTDestroyCoordinateTransformation(fc.ct);
     if (ok)
-        warn_rivers(h, p, zero, badw);
+        warn_rivers(h, p, zero, narrow, badw);
     return ok;
 }
 
