@@ -443,3 +443,26 @@ def test_river_narrower_than_the_lattice_skipped(wm, tmp_dir, simple_scene):
     assert p.returncode == 0, p.stderr
     assert 'narrower than the lattice' in p.stderr, p.stderr
     assert len(wm.read_output(out)['water']) == 0
+
+
+@pytest.mark.parametrize('spike', ['middle', 'start', 'retraced'])
+def test_lake_spike_of_no_width(wm, tmp_dir, spike):
+    """A lake ring that goes out along an edge and comes back (a, b, a), at
+    its middle, across its start, or retracing one edge many times, fills
+    nothing there even-odd: one polygon, the triangle's area (the spike gave
+    100 diamond specks; the retraced ring took 10 s)."""
+    tri = [scenes.xy(0, 0), scenes.xy(100, 0), scenes.xy(100, 100)]
+    tip = scenes.xy(300, 50)
+    if spike == 'middle':
+        ring = [tri[0], tri[1], tip, tri[1], tri[2]]
+    elif spike == 'start':
+        ring = [tri[1], tip, tri[1], tri[2], tri[0]]
+    else:
+        ring = [tri[0]] + [tri[1], tip] * 500 + [tri[1], tri[2]]
+    wkt = 'POLYGON ((%s))' % ', '.join('%.3f %.3f' % p for p in ring + ring[:1])
+    path = os.path.join(tmp_dir, 'spike.gpkg')
+    scenes.write_layer(path, 'lakes', ogr.wkbPolygon, scenes.SCENE_EPSG, [{'geom': wkt}])
+    res = wm.run({'LAKES': path, 'LAKES_LAYER': 'lakes', 'PIXEL_SIZE': 0.5,
+                  'BLOCK_SIZE': 256})
+    assert len(res.water) == 1, [f.geom.area for f in res.water]
+    assert abs(oracle.total_area(res.water) - 5000.0) < 1.0, oracle.total_area(res.water)
