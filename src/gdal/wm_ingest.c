@@ -1039,12 +1039,12 @@ static void cancel_spikes(builder *b)
     size_t m = 0;
     for (size_t i = 0; i < b->npts; i++)
     {
-        if (m >= 2 && b->px[m - 2] == b->px[i] && b->py[m - 2] == b->py[i])
+        if (m >= 2 && same_pt(b, m - 2, i))
         {
             m--; /* the tip goes, and the point back equals the one before */
             continue;
         }
-        if (m >= 1 && b->px[m - 1] == b->px[i] && b->py[m - 1] == b->py[i])
+        if (m >= 1 && same_pt(b, m - 1, i))
             continue;
         b->px[m] = b->px[i];
         b->py[m] = b->py[i];
