@@ -16,6 +16,7 @@
 #include "holes.h"
 #include "merge.h"
 #include "paper.h"
+#include "pinch.h"
 #include "simplify.h"
 
 #include <math.h>
@@ -425,6 +426,8 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
         wm_probe_free(&probe);
     }
     wm_field_free(f);
+    if (st == WM_OK)
+        st = wm_rings_open_pinches(&raw, ctx);
     if (st == WM_OK)
         wm_rings_drop_small(&raw, s->n * WM_Q, opts->min_area);
     double t2 = wm_now();
