@@ -554,6 +554,20 @@ def test_block_cache_bounded(wm, random_scene):
     assert nsmall == nbig == {k: len(v) for k, v in big.items()}
 
 
+@pytest.mark.parametrize('value', ['abc', '-5', '12MB', 'nan', ''])
+def test_block_cache_max_garbage_refused(wm, simple_options, value):
+    """WATERMESH_CACHE_MAX that is not a number of megabytes >= 0 fails the
+    open, naming the option and the value (CPLAtof read 'abc' as 0 and
+    quietly kept no block)."""
+    gdal.SetConfigOption('WATERMESH_CACHE_MAX', value)
+    try:
+        ds, cap = wm.open(simple_options)
+    finally:
+        gdal.SetConfigOption('WATERMESH_CACHE_MAX', None)
+    assert ds is None
+    assert 'WATERMESH_CACHE_MAX=%s' % value in cap.text, cap.text
+
+
 def test_num_threads_identical(wm, simple_options):
     ref = wm.run(with_(simple_options, NUM_THREADS=1)).signature()
     for n in (2, 4, 'ALL_CPUS'):

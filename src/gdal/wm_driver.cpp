@@ -585,12 +585,36 @@ int WaterMeshDataset::Identify(GDALOpenInfo *poOpenInfo)
     return STARTS_WITH(h, "<WaterMesh");
 }
 
+/* WATERMESH_CACHE_MAX (MB, default 512) in bytes; false, with the error
+ * reported, when it is not a number >= 0. */
+static bool CacheMaxFromConfig(size_t *pnBytes)
+{
+    const char *pszVal = CPLGetConfigOption("WATERMESH_CACHE_MAX", "512");
+    char *pszEnd = nullptr;
+    const double dfMB = CPLStrtod(pszVal, &pszEnd);
+    while (pszEnd && (*pszEnd == ' ' || *pszEnd == '\t'))
+        pszEnd++;
+    if (pszEnd == pszVal || !pszEnd || *pszEnd != '\0' || !(dfMB >= 0))
+    {
+        CPLError(CE_Failure, CPLE_IllegalArg,
+                 "WATERMESH: WATERMESH_CACHE_MAX=%s is not a number of "
+                 "megabytes (0 or more).",
+                 pszVal);
+        return false;
+    }
+    *pnBytes = static_cast<size_t>(std::min(dfMB * 1048576.0, 1e15));
+    return true;
+}
+
 GDALDataset *WaterMeshDataset::Open(GDALOpenInfo *poOpenInfo)
 {
     if (!Identify(poOpenInfo))
         return nullptr;
     if (poOpenInfo->eAccess == GA_Update)
         return nullptr; /* read-only; quiet so ogrinfo/QGIS retry */
+    size_t nCacheMax = 0;
+    if (!CacheMaxFromConfig(&nCacheMax))
+        return nullptr;
     char **papszOpts = nullptr;
     if (!STARTS_WITH_CI(poOpenInfo->pszFilename, "WATERMESH:"))
     {
@@ -634,12 +658,7 @@ GDALDataset *WaterMeshDataset::Open(GDALOpenInfo *poOpenInfo)
     {
         auto poDS = std::make_unique<WaterMeshDataset>();
         poDS->m_poScene = scene;
-        const double dfCacheMB =
-            CPLAtof(CPLGetConfigOption("WATERMESH_CACHE_MAX", "512"));
-        poDS->m_nCacheMax =
-            dfCacheMB > 0
-                ? static_cast<size_t>(std::min(dfCacheMB * 1048576.0, 1e15))
-                : 0;
+        poDS->m_nCacheMax = nCacheMax;
         poDS->SetDescription(poOpenInfo->pszFilename);
         if (poOpenInfo->nOpenFlags & GDAL_OF_VECTOR)
         {
