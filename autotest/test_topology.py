@@ -494,6 +494,16 @@ def test_densified_arcs_keep_their_strip(wm, tmp_path):
     assert sum(len(oracle.polygons_of(g)) for g in orc.values()) == len(res.water)
 
 
+def _assert_valid_and_apart(res):
+    """Water output, every polygon valid, no ring through a point twice."""
+    assert res.water and all(f.geom.is_valid for f in res.water)
+    for f in res.water:
+        for poly in getattr(f.geom, 'geoms', [f.geom]):
+            for r in [poly.exterior] + list(poly.interiors):
+                pts = list(r.coords)[:-1]
+                assert len(set(pts)) == len(pts), 'a ring touches itself'
+
+
 @pytest.mark.parametrize('seed,simplify', [(5, 0), (10, 0), (42, None)])
 def test_self_crossing_lake_pinches_opened(wm, tmp_path, seed, simplify):
     """A lake ring of 100-200 random vertices within a few metres crosses
@@ -517,14 +527,62 @@ def test_self_crossing_lake_pinches_opened(wm, tmp_path, seed, simplify):
     if simplify is not None:
         options['SIMPLIFY'] = simplify
     res = wm.run(options)
-    assert res.water and all(f.geom.is_valid for f in res.water)
-    for f in res.water:
-        for poly in getattr(f.geom, 'geoms', [f.geom]):
-            for r in [poly.exterior] + list(poly.interiors):
-                pts = list(r.coords)[:-1]
-                assert len(set(pts)) == len(pts), 'a ring touches itself'
+    _assert_valid_and_apart(res)
     # (the oracle's even-odd union of such a ring takes GEOS over 24 GiB:
     # test_self_crossing_lake_touches_itself measures a small one)
+
+
+# QA round 28's reduced cases, each a lake ring (or two) crammed into a few
+# hundredths of a pixel, where a vertex of one ring lies inside another
+# ring's segment (a T), with the options that stopped them
+CRAMMED = {
+    'cdt_t': ([[(400006.41015625, 4700011.43359375), (400006.453125, 4700011.45703125),
+                (400006.3984375, 4700011.4296875), (400006.421875, 4700011.42578125),
+                (400006.4453125, 4700011.4453125), (400006.41015625, 4700011.42578125),
+                (400006.4140625, 4700011.4765625), (400006.39453125, 4700011.42578125),
+                (400006.41015625, 4700011.4453125), (400006.43359375, 4700011.453125),
+                (400006.44921875, 4700011.4296875), (400006.42578125, 4700011.44921875),
+                (400006.44140625, 4700011.46875), (400006.41796875, 4700011.42578125),
+                (400006.4375, 4700011.4453125), (400006.40234375, 4700011.421875),
+                (400006.45703125, 4700011.46484375)]],
+              {'PIXEL_SIZE': 1, 'BLOCK_SIZE': 16, 'SIMPLIFY': 0}),
+    'simplify_t': ([[(400008.4613833691, 4700004.803341487), (400008.46185808105, 4700004.799481513),
+                     (400008.46832523786, 4700004.80615557), (400008.46267555957, 4700004.80184828),
+                     (400008.473304964, 4700004.804636008), (400008.46100781736, 4700004.806314861),
+                     (400008.4711322093, 4700004.803984799), (400008.4625868761, 4700004.80224758),
+                     (400008.4694976853, 4700004.800299493)],
+                    [(400008.4680172994, 4700004.801023), (400008.47112700425, 4700004.795949061),
+                     (400008.4678034558, 4700004.794166657), (400008.46262616944, 4700004.806410139)]],
+                   {'PIXEL_SIZE': 0.25, 'BLOCK_SIZE': 16}),
+    'fan_t': ([[(400088.46075025026, 4700110.789641385), (400088.51335571724, 4700110.725394001),
+                (400087.21778722596, 4700111.553073797), (400088.3656516461, 4700110.8808408035),
+                (400088.49138533016, 4700110.758725617), (400086.9298550918, 4700111.813764501),
+                (400088.49811681884, 4700110.887814013), (400087.75743887195, 4700112.253526181),
+                (400088.5378837696, 4700110.640153315), (400087.5775295115, 4700112.255665089),
+                (400088.3114799886, 4700110.850212865), (400087.2863956638, 4700111.840241517),
+                (400088.4023597887, 4700110.751907488), (400088.43437670707, 4700110.643919798),
+                (400087.3596186683, 4700110.02243159), (400088.421956503, 4700110.72073611),
+                (400087.1371803205, 4700112.090602628)]],
+              {'PIXEL_SIZE': 2, 'BLOCK_SIZE': 256}),
+}
+
+
+@pytest.mark.parametrize('case', sorted(CRAMMED))
+def test_crammed_lake_tees_opened(wm, tmp_path, case):
+    """A vertex inside another ring's segment (a T) stopped the CDT ("cdt:
+    vertex lies on ring edge") or the simplifier ("input rings cross or
+    touch"); pinch.c moves the vertex into the convex side of its turn."""
+    from osgeo import ogr
+    import scenes
+    rings, opts = CRAMMED[case]
+    feats = [{'geom': 'POLYGON ((%s))' % ','.join('%r %r' % p for p in r + r[:1])}
+             for r in rings]
+    path = str(tmp_path / 'lake.gpkg')
+    scenes.write_layer(path, 'lakes', ogr.wkbPolygon, adversarial.EPSG, feats)
+    options = dict(opts, LAKES=path, LAKES_LAYER='lakes', NUM_THREADS=1)
+    res = wm.run(options)
+    assert not res.cap.errors, res.cap.errors
+    _assert_valid_and_apart(res)
 
 
 def test_self_crossing_lake_touches_itself(wm, tmp_path):

@@ -153,18 +153,60 @@ static void no_room_to_move(void)
     wm_rings_free(&r);
 }
 
-static void overlapping_wedges(void)
+static void hole_at_straight_side(void)
 {
-    /* a hole ring touching a straight side, as OGC draws it: neither pass
-     * turns left, nothing is cut */
+    /* a hole ring touching a straight side at a vertex of both, as OGC
+     * draws it: the shell goes straight through, the hole turns right;
+     * the hole's vertex moves into its land */
     const int shell[] = {0, 0, 10, 0, 20, 0, 20, 20, 0, 20};
     const int hole[] = {10, 0, 5, 10, 15, 10};
     wm_rings r;
     memset(&r, 0, sizeof r);
     ring(&r, shell, 5);
     ring(&r, hole, 3);
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "overlapping: runs");
-    TAP_EQ(r.npts, 8, "overlapping: left as it is");
+    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "hole at side: runs");
+    TAP_EQ(repeats(&r), 0, "hole at side: no pinch after");
+    TAP_EQ(meetings(&r), 0, "hole at side: disjoint");
+    TAP_OK(r.pts[1].y == O && r.pts[5].y > O,
+           "hole at side: the hole's vertex moved off the side");
+    wm_rings_free(&r);
+}
+
+static void hole_on_edge(void)
+{
+    /* a T: the hole's vertex lies inside the shell's bottom edge */
+    const int shell[] = {0, 0, 20, 0, 20, 20, 0, 20};
+    const int hole[] = {10, 0, 5, 10, 15, 10};
+    wm_rings r;
+    memset(&r, 0, sizeof r);
+    ring(&r, shell, 4);
+    ring(&r, hole, 3);
+    TAP_EQ(meetings(&r), 2, "T: the rings meet before");
+    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "T: runs");
+    TAP_EQ(meetings(&r), 0, "T: disjoint after");
+    TAP_OK(r.npts == 7 && r.pts[4].y > O, "T: the hole's vertex moved up");
+    int32_t enc[2];
+    TAP_EQ(wm_holes_nesting(&r, enc, NULL), WM_OK, "T: nesting");
+    TAP_EQ(enc[1], 0, "T: the hole is in the shell");
+    wm_rings_free(&r);
+}
+
+static void blocked_wedge(void)
+{
+    /* a land hole turning right at (10, 10), an island inside it touching
+     * it there: the hole's convex side holds the island's segments, so
+     * only the island moves (into its water) */
+    const int a[] = {0, 0, 10, 10, 20, 0, 20, -10, 0, -10};
+    const int b[] = {10, 10, 8, 4, 12, 4};
+    wm_rings r;
+    memset(&r, 0, sizeof r);
+    ring(&r, a, 5);
+    ring(&r, b, 3);
+    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "blocked: runs");
+    TAP_OK(r.pts[1].x == O + 10 && r.pts[1].y == O + 10,
+           "blocked: the hole's pass stays");
+    TAP_OK(r.pts[5].y < O + 10, "blocked: the island's pass moves");
+    TAP_EQ(meetings(&r), 0, "blocked: disjoint");
     wm_rings_free(&r);
 }
 
@@ -357,7 +399,9 @@ int main(void)
     two_lobes();
     vertex_in_sweep();
     no_room_to_move();
-    overlapping_wedges();
+    hole_at_straight_side();
+    hole_on_edge();
+    blocked_wedge();
     three_lobes();
     no_pinch_unchanged();
     random_images(8);

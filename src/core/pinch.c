@@ -3,14 +3,16 @@
  *
  * Method (pinch.h has the rule): every vertex strictly inside a cell of the
  * sample grid (no other may repeat, in_cell) goes into an open-addressing
- * table keyed by its lattice point; a point met twice is a pinch. Each
- * pinch's passes that turn left are candidates, each with the lattice
- * point it would move to (the first one strictly inside its triangle
- * along the wedge's bisector) or none (then it would be cut); the regions
- * the moves sweep are checked empty by one pass over the vertices (a
- * sorted list of the grid cells the triangles' boxes cover); all passes
- * but one per pinch are chosen among those that passed and moved or cut.
- * A move or cut next to another waits for a next round on the new rings.
+ * table keyed by its lattice point; a point met twice is a pinch. Their
+ * segments go into a sorted list of the grid cells their boxes cover; a
+ * vertex inside one of them is a T. The passes through each such point
+ * that may move are candidates, each with the lattice point it would move
+ * to (the first one strictly inside its triangle along the wedge's
+ * bisector) or none (then it would be cut); the regions they sweep are
+ * checked empty by one pass over the vertices (the same cell list, of the
+ * triangles' boxes); all passes but one per pinch (the vertex of a T) are
+ * chosen among those that passed and moved or cut. A move or cut next to
+ * another waits for a next round on the new rings.
  *
  * Complexity: O(n) for the filter, O(m) expected for the table of the m
  * vertices inside cells, once when there is no pinch;
@@ -30,9 +32,11 @@
 
 #define FREE UINT32_MAX
 #define CELL_SHIFT 8 /* bucket of the emptiness check: a pixel */
-#define CUT 1        /* mark of a vertex cut */
-#define NEXT 2       /* mark of a neighbour of a vertex cut */
+#define MOVED 1      /* mark of a vertex moved or pass */
+#define NEXT 2       /* mark of a neighbour of one */
 #define MAX_ROUNDS 64
+#define PINCH 1 /* a vertex at a pinch */
+#define TEE 2   /* a vertex inside another segment */
 
 /* A lattice point's slot table: slot[h] is the first vertex seen there. */
 typedef struct
@@ -41,30 +45,32 @@ typedef struct
     size_t mask;
 } ptab;
 
-/* A pass that may move: vertex i (at P) of ring r, between vertices a and
- * b, at a pinch of npass passes, to q (when moves; else cut). */
+/* A pass through a pinch that may move: vertex i (at P) of ring r,
+ * between vertices a and b, at a pinch of npass passes, to q (when moves;
+ * else cut). */
 typedef struct
 {
     size_t i, a, b;
-    size_t r, pinch, npass; /* pinch: the first vertex at P */
+    size_t r, group, npass; /* group: its pinch's number */
     wm_pt q;
     int moves, ok; /* ok: the region it sweeps holds no vertex */
-} cut;
+} pass;
 
 typedef struct
 {
     uint64_t cell;
-    size_t c; /* index into the cuts */
+    size_t c, c2; /* the item: a pass (c), or a segment (c to c2) */
 } cellref;
 
-static uint64_t pt_key(wm_pt p)
+/* Two 32-bit coordinates in one key. */
+static uint64_t pack(int32_t x, int32_t y)
 {
-    return (uint64_t)(uint32_t)p.x << 32 | (uint32_t)p.y;
+    return (uint64_t)(uint32_t)x << 32 | (uint32_t)y;
 }
 
 static size_t pt_hash(wm_pt p, size_t mask)
 {
-    uint64_t k = pt_key(p);
+    uint64_t k = pack(p.x, p.y);
     k ^= k >> 33;
     k *= 0xff51afd7ed558ccdULL;
     k ^= k >> 33;
@@ -91,11 +97,6 @@ static int cmp_cellref(const void *x, const void *y)
 {
     const cellref *a = x, *b = y;
     return (a->cell > b->cell) - (a->cell < b->cell);
-}
-
-static uint64_t cell_key(int32_t cx, int32_t cy)
-{
-    return (uint64_t)(uint32_t)cx << 32 | (uint32_t)cy;
 }
 
 /* The ring holding vertex i. */
@@ -162,30 +163,30 @@ static int in_cell(wm_pt p)
     return (p.x & (WM_Q - 1)) != 0 && (p.y & (WM_Q - 1)) != 0;
 }
 
-/* Step 1: the table of the vertices inside cells; those met at a point
- * already taken go to rep[0 .. *nrep) (a pinch each). Returns 0 when out
- * of memory. */
-static int find_repeats(const wm_rings *r, ptab *t, size_t **rep, size_t *nrep)
+/* Step 1: the vertices inside cells into in[0 .. *nin) (the caller frees
+ * it) and a table of them; those met at a point already taken go to
+ * rep[0 .. *nrep) (a pinch each). Returns 0 when out of memory. */
+static int find_repeats(const wm_rings *r, ptab *t, uint32_t **in, size_t *nin,
+                        size_t **rep, size_t *nrep)
 {
-    uint32_t *in = malloc(r->npts * sizeof *in);
-    size_t ncell = 0, cap = 16, rcap = 0;
-    int ok = 0;
-    if (!in)
+    size_t cap = 16, rcap = 0;
+    *nin = 0;
+    if (!(*in = malloc(r->npts * sizeof **in)))
         return 0;
     for (size_t i = 0; i < r->npts; i++)
     {
-        in[ncell] = (uint32_t)i; /* kept only where it is in a cell */
-        ncell += (size_t)in_cell(r->pts[i]);
+        (*in)[*nin] = (uint32_t)i; /* kept only where it is in a cell */
+        *nin += (size_t)in_cell(r->pts[i]);
     }
-    while (cap < 2 * ncell)
+    while (cap < 2 * *nin)
         cap *= 2;
     t->mask = cap - 1;
     if (!(t->slot = malloc(cap * sizeof *t->slot)))
-        goto cleanup;
+        return 0;
     memset(t->slot, 0xff, cap * sizeof *t->slot);
-    for (size_t k = 0; k < ncell; k++)
+    for (size_t k = 0; k < *nin; k++)
     {
-        const uint32_t i = in[k];
+        const uint32_t i = (*in)[k];
         size_t h;
         if (ptab_find(t, r->pts, r->pts[i], &h) == FREE)
         {
@@ -197,43 +198,177 @@ static int find_repeats(const wm_rings *r, ptab *t, size_t **rep, size_t *nrep)
             rcap = rcap ? 2 * rcap : 16;
             size_t *grown = realloc(*rep, rcap * sizeof *grown);
             if (!grown)
-                goto cleanup;
+                return 0;
             *rep = grown;
         }
         (*rep)[(*nrep)++] = i;
     }
+    return 1;
+}
+
+/* The vertex after i in its ring (ring ri). */
+static size_t next_of(const wm_rings *r, size_t ri, size_t i)
+{
+    return i + 1 < r->start[ri + 1] ? i + 1 : r->start[ri];
+}
+
+/* Appends (cell, item, item2) for every grid cell the box of a and b covers;
+ * returns 0 when out of memory. */
+static int add_cells(cellref **ref, size_t *n, size_t *cap, wm_pt a, wm_pt b,
+                     size_t item, size_t item2)
+{
+    const int32_t x0 = (a.x < b.x ? a.x : b.x) >> CELL_SHIFT;
+    const int32_t x1 = (a.x < b.x ? b.x : a.x) >> CELL_SHIFT;
+    const int32_t y0 = (a.y < b.y ? a.y : b.y) >> CELL_SHIFT;
+    const int32_t y1 = (a.y < b.y ? b.y : a.y) >> CELL_SHIFT;
+    for (int32_t cx = x0; cx <= x1; cx++)
+        for (int32_t cy = y0; cy <= y1; cy++)
+        {
+            if (*n == *cap)
+            {
+                *cap = *cap ? 2 * *cap : 64;
+                cellref *grown = realloc(*ref, *cap * sizeof *grown);
+                if (!grown)
+                    return 0;
+                *ref = grown;
+            }
+            (*ref)[(*n)++] = (cellref){pack(cx, cy), item, item2};
+        }
+    return 1;
+}
+
+/* The first of ref[0 .. n) (sorted) in the cell of p. */
+static size_t first_in_cell(const cellref *ref, size_t n, wm_pt p)
+{
+    const uint64_t key = pack(p.x >> CELL_SHIFT, p.y >> CELL_SHIFT);
+    size_t lo = 0, hi = n;
+    while (lo < hi)
+    {
+        const size_t mid = lo + (hi - lo) / 2;
+        if (ref[mid].cell < key)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Step 1b: the vertices inside cells (in[0 .. nin)) that lie inside a
+ * segment with an end inside a cell (a T: the boundary touches itself
+ * there too), each with the segment's two vertices, into tee[0 .. 3
+ * *ntee). A segment through a vertex inside a
+ * cell has such an end: marching squares' segments cross cells that hold
+ * no other boundary. Returns 0 when out of memory. */
+static int find_tees(const wm_rings *r, const uint32_t *in, size_t nin,
+                     size_t **tee, size_t *ntee)
+{
+    cellref *ref = NULL;
+    size_t nref = 0, cap = 0, tcap = 0;
+    int ok = 0;
+    for (size_t k = 0, ri = 0; k < nin; k++)
+    {
+        const size_t i = in[k]; /* ascending: so are the rings */
+        while (r->start[ri + 1] <= i)
+            ri++;
+        const size_t j = next_of(r, ri, i);
+        const size_t h = i > r->start[ri] ? i - 1 : r->start[ri + 1] - 1;
+        /* segments i -> j, and h -> i unless h lists it */
+        if (!add_cells(&ref, &nref, &cap, r->pts[i], r->pts[j], i, j) ||
+            (!in_cell(r->pts[h]) &&
+             !add_cells(&ref, &nref, &cap, r->pts[h], r->pts[i], h, i)))
+            goto cleanup;
+    }
+    if (nref)
+        qsort(ref, nref, sizeof *ref, cmp_cellref);
+    for (size_t k = 0; k < nin; k++)
+    {
+        const wm_pt v = r->pts[in[k]];
+        const uint64_t key = pack(v.x >> CELL_SHIFT, v.y >> CELL_SHIFT);
+        for (size_t q = first_in_cell(ref, nref, v);
+             q < nref && ref[q].cell == key; q++)
+        {
+            const wm_pt pa = r->pts[ref[q].c], pb = r->pts[ref[q].c2];
+            if (wm_pt_eq(v, pa) || wm_pt_eq(v, pb) || !wm_on_segment(pa, pb, v))
+                continue;
+            if (*ntee == tcap)
+            {
+                tcap = tcap ? 2 * tcap : 16;
+                size_t *grown = realloc(*tee, 3 * tcap * sizeof *grown);
+                if (!grown)
+                    goto cleanup;
+                *tee = grown;
+            }
+            (*tee)[3 * *ntee] = in[k];
+            (*tee)[3 * *ntee + 1] = ref[q].c;
+            (*tee)[3 * (*ntee)++ + 2] = ref[q].c2;
+            break;
+        }
+    }
     ok = 1;
 cleanup:
-    free(in);
+    free(ref);
     return ok;
 }
 
-/* Step 2: the candidates at the pinch of vertex f (the first there) and
- * its repeats rep[lo .. hi): the passes that turn left, each with the
- * number of passes there and the point it would move to. Returns 0 when
- * out of memory. */
-static int candidates(const wm_rings *r, size_t f, const size_t *rep, size_t lo,
-                      size_t hi, cut **cuts, size_t *ncut, size_t *cap)
+/* The neighbours of vertex i in its ring: *a before it, *b after it. */
+static void neighbours(const wm_rings *r, size_t i, size_t *a, size_t *b)
 {
-    for (size_t k = lo; k <= hi; k++)
+    const size_t ri = ring_of(r, i), s = r->start[ri];
+    const size_t len = wm_rings_len(r, ri);
+    *a = s + (i - s + len - 1) % len;
+    *b = s + (i - s + 1) % len;
+}
+
+/* Whether e lies in the closed wedge at p of the counter-clockwise
+ * triangle (u, p, w). */
+static int in_wedge(wm_pt u, wm_pt p, wm_pt w, wm_pt e)
+{
+    return wm_orient(u, p, e) >= 0 && wm_orient(p, w, e) >= 0;
+}
+
+/* Step 2: the candidates among the passes through one point P, at[0 ..
+ * n), npass passes there in all (the segment through a T, from t0 to t1,
+ * counts as one that does not move): each pass that turns at P, to move
+ * into the convex side of its turn (its water wedge where it turns left,
+ * its land wedge where it turns right), where no other segment at P leaves
+ * into that wedge; with the point it would move to, numbered group.
+ * Returns 0 when out of memory. */
+static int candidates(const wm_rings *r, const size_t *at, size_t n,
+                      const wm_pt *t, size_t npass, size_t group, pass **ps,
+                      size_t *nps, size_t *cap)
+{
+    for (size_t k = 0; k < n; k++)
     {
-        const size_t i = k == hi ? f : rep[k];
-        const size_t ri = ring_of(r, i), s = r->start[ri];
-        const size_t n = wm_rings_len(r, ri);
-        const size_t a = s + (i - s + n - 1) % n, b = s + (i - s + 1) % n;
-        if (wm_orient(r->pts[a], r->pts[i], r->pts[b]) <= 0)
+        const size_t i = at[k];
+        size_t a, b;
+        neighbours(r, i, &a, &b);
+        const int o = wm_orient(r->pts[a], r->pts[i], r->pts[b]);
+        if (o == 0)
             continue;
-        if (*ncut == *cap)
+        const size_t u = o > 0 ? a : b, w = o > 0 ? b : a;
+        const wm_pt pu = r->pts[u], p = r->pts[i], pw = r->pts[w];
+        int clear =
+            !t || (!in_wedge(pu, p, pw, t[0]) && !in_wedge(pu, p, pw, t[1]));
+        for (size_t j = 0; clear && j < n; j++)
+        {
+            size_t x, y;
+            neighbours(r, at[j], &x, &y);
+            clear = j == k || (!in_wedge(pu, p, pw, r->pts[x]) &&
+                               !in_wedge(pu, p, pw, r->pts[y]));
+        }
+        if (!clear)
+            continue;
+        if (*nps == *cap)
         {
             *cap = *cap ? 2 * *cap : 16;
-            cut *grown = realloc(*cuts, *cap * sizeof *grown);
+            pass *grown = realloc(*ps, *cap * sizeof *grown);
             if (!grown)
                 return 0;
-            *cuts = grown;
+            *ps = grown;
         }
-        cut *c = &(*cuts)[(*ncut)++];
-        *c = (cut){i, a, b, ri, f, hi - lo + 1, r->pts[i], 0, 1};
-        c->moves = move_to(r->pts[a], r->pts[i], r->pts[b], &c->q);
+        pass *c = &(*ps)[(*nps)++];
+        *c = (pass){i, u, w, ring_of(r, i), group, npass, p, 0, 1};
+        c->moves = move_to(pu, p, pw, &c->q);
     }
     return 1;
 }
@@ -241,56 +376,38 @@ static int candidates(const wm_rings *r, size_t f, const size_t *rep, size_t lo,
 /* Step 3: every candidate that sweeps a vertex other than its own three
  * points is given up: a move sweeps its closed triangle less the open one
  * (a, q, b), a cut the closed triangle. Returns 0 when out of memory. */
-static int check_empty(const wm_rings *r, cut *cuts, size_t ncut)
+static int check_empty(const wm_rings *r, pass *ps, size_t nps)
 {
     size_t nref = 0, cap = 0;
     cellref *ref = NULL;
-    for (size_t c = 0; c < ncut; c++)
+    for (size_t c = 0; c < nps; c++)
     {
-        const wm_pt p[3] = {r->pts[cuts[c].a], r->pts[cuts[c].i],
-                            r->pts[cuts[c].b]};
-        int32_t x0 = p[0].x, x1 = p[0].x, y0 = p[0].y, y1 = p[0].y;
-        for (int k = 1; k < 3; k++)
+        const wm_pt a = r->pts[ps[c].a], p = r->pts[ps[c].i];
+        const wm_pt b = r->pts[ps[c].b];
+        wm_pt lo = a, hi = a;
+        lo.x = p.x < lo.x ? p.x : lo.x;
+        lo.x = b.x < lo.x ? b.x : lo.x;
+        lo.y = p.y < lo.y ? p.y : lo.y;
+        lo.y = b.y < lo.y ? b.y : lo.y;
+        hi.x = p.x > hi.x ? p.x : hi.x;
+        hi.x = b.x > hi.x ? b.x : hi.x;
+        hi.y = p.y > hi.y ? p.y : hi.y;
+        hi.y = b.y > hi.y ? b.y : hi.y;
+        if (!add_cells(&ref, &nref, &cap, lo, hi, c, 0))
         {
-            x0 = p[k].x < x0 ? p[k].x : x0;
-            x1 = p[k].x > x1 ? p[k].x : x1;
-            y0 = p[k].y < y0 ? p[k].y : y0;
-            y1 = p[k].y > y1 ? p[k].y : y1;
+            free(ref);
+            return 0;
         }
-        for (int32_t cx = x0 >> CELL_SHIFT; cx <= x1 >> CELL_SHIFT; cx++)
-            for (int32_t cy = y0 >> CELL_SHIFT; cy <= y1 >> CELL_SHIFT; cy++)
-            {
-                if (nref == cap)
-                {
-                    cap = cap ? 2 * cap : 64;
-                    cellref *grown = realloc(ref, cap * sizeof *grown);
-                    if (!grown)
-                    {
-                        free(ref);
-                        return 0;
-                    }
-                    ref = grown;
-                }
-                ref[nref++] = (cellref){cell_key(cx, cy), c};
-            }
     }
     qsort(ref, nref, sizeof *ref, cmp_cellref);
     for (size_t q = 0; q < r->npts; q++)
     {
         const wm_pt v = r->pts[q];
-        const uint64_t key = cell_key(v.x >> CELL_SHIFT, v.y >> CELL_SHIFT);
-        size_t lo = 0, hi = nref;
-        while (lo < hi)
+        const uint64_t key = pack(v.x >> CELL_SHIFT, v.y >> CELL_SHIFT);
+        for (size_t k = first_in_cell(ref, nref, v);
+             k < nref && ref[k].cell == key; k++)
         {
-            const size_t mid = lo + (hi - lo) / 2;
-            if (ref[mid].cell < key)
-                lo = mid + 1;
-            else
-                hi = mid;
-        }
-        for (size_t k = lo; k < nref && ref[k].cell == key; k++)
-        {
-            cut *c = &cuts[ref[k].c];
+            pass *c = &ps[ref[k].c];
             const wm_pt a = r->pts[c->a], p = r->pts[c->i], b = r->pts[c->b];
             if (c->ok && !wm_pt_eq(v, a) && !wm_pt_eq(v, p) &&
                 !wm_pt_eq(v, b) && in_triangle(a, p, b, v) &&
@@ -302,28 +419,28 @@ static int check_empty(const wm_rings *r, cut *cuts, size_t ncut)
     return 1;
 }
 
-/* Step 4: of the candidates of each pinch (consecutive in cuts[]) that
+/* Step 4: of the candidates of each pinch (consecutive in ps[]) that
  * sweep no vertex, all passes but one moved or cut, a cut only in a ring
  * that keeps three vertices (left[]: vertices still in each ring), no two
- * next to each other in a ring (mark[]: CUT, or NEXT to one); the moves
+ * next to each other in a ring (mark[]: MOVED, or NEXT to one); the moves
  * made, the vertices to remove into gone[0 .. return). */
-static size_t apply_cuts(wm_rings *r, const cut *cuts, size_t ncut,
-                         size_t *left, uint8_t *mark, size_t *gone,
-                         size_t *nmoved)
+static size_t apply_passes(wm_rings *r, const pass *ps, size_t nps,
+                           size_t *left, uint8_t *mark, size_t *gone,
+                           size_t *nmoved)
 {
     size_t ngone = 0;
-    for (size_t lo = 0, hi; lo < ncut; lo = hi)
+    for (size_t lo = 0, hi; lo < nps; lo = hi)
     {
         size_t made = 0;
-        for (hi = lo + 1; hi < ncut && cuts[hi].pinch == cuts[lo].pinch; hi++)
+        for (hi = lo + 1; hi < nps && ps[hi].group == ps[lo].group; hi++)
             ;
-        for (size_t k = lo; k < hi && made + 1 < cuts[lo].npass; k++)
+        for (size_t k = lo; k < hi && made + 1 < ps[lo].npass; k++)
         {
-            const cut *c = &cuts[k];
+            const pass *c = &ps[k];
             if (!c->ok || (!c->moves && left[c->r] <= 3) || mark[c->i] ||
-                mark[c->a] == CUT || mark[c->b] == CUT)
+                mark[c->a] == MOVED || mark[c->b] == MOVED)
                 continue;
-            mark[c->i] = CUT;
+            mark[c->i] = MOVED;
             mark[c->a] = mark[c->b] = NEXT;
             if (c->moves)
             {
@@ -370,46 +487,65 @@ static void remove_vertices(wm_rings *r, const size_t *gone, size_t n)
 static int open_round(wm_rings *r, size_t *nchanged)
 {
     ptab t = {NULL, 0};
-    size_t *rep = NULL, nrep = 0, *key = NULL, *left = NULL, *gone = NULL;
-    uint8_t *mark = NULL;
-    cut *cuts = NULL;
-    size_t ncut = 0, cap = 0;
+    uint32_t *in = NULL;
+    size_t *rep = NULL, *key = NULL, *tee = NULL, *left = NULL, *gone = NULL;
+    size_t nin = 0, nrep = 0, ntee = 0, nps = 0, cap = 0, group = 0;
+    uint8_t *mark = NULL, *seen = NULL; /* seen: PINCH, TEE */
+    pass *ps = NULL;
     int ok = 0;
     *nchanged = 0;
-    if (!find_repeats(r, &t, &rep, &nrep))
+    if (!find_repeats(r, &t, &in, &nin, &rep, &nrep) ||
+        !find_tees(r, in, nin, &tee, &ntee))
         goto cleanup;
-    /* the repeats grouped by their pinch (the first vertex there) */
-    if (nrep && !(key = malloc(2 * nrep * sizeof *key)))
+    /* the passes through each pinch: its first vertex, then its repeats
+     * (sorted by that first vertex); a point that is both a pinch and a T
+     * waits (no candidate weighs both) */
+    if ((nrep || ntee) && !(seen = calloc(r->npts, 1)))
+        goto cleanup;
+    if (nrep && !(key = malloc((3 * nrep + 1) * sizeof *key)))
         goto cleanup;
     for (size_t k = 0; k < nrep; k++)
     {
         size_t h;
         key[2 * k] = ptab_find(&t, r->pts, r->pts[rep[k]], &h);
         key[2 * k + 1] = rep[k];
+        seen[key[2 * k]] = seen[rep[k]] = PINCH;
     }
+    for (size_t k = 0; k < ntee; k++)
+        seen[tee[3 * k]] |= TEE;
     if (nrep)
         qsort(key, nrep, 2 * sizeof *key, cmp_size);
-    for (size_t k = 0; k < nrep; k++)
-        rep[k] = key[2 * k + 1];
     for (size_t lo = 0, hi; lo < nrep; lo = hi)
     {
-        for (hi = lo + 1; hi < nrep && key[2 * hi] == key[2 * lo]; hi++)
-            ;
-        if (!candidates(r, key[2 * lo], rep, lo, hi, &cuts, &ncut, &cap))
+        size_t *at = key + 2 * nrep, n = 0;
+        int both = 0;
+        at[n++] = key[2 * lo];
+        for (hi = lo; hi < nrep && key[2 * hi] == key[2 * lo]; hi++)
+            at[n++] = key[2 * hi + 1];
+        for (size_t k = 0; k < n; k++)
+            both |= seen[at[k]] & TEE;
+        if (!both && !candidates(r, at, n, NULL, n, group++, &ps, &nps, &cap))
             goto cleanup;
     }
-    if (ncut)
+    for (size_t k = 0; k < ntee; k++)
+    {
+        const wm_pt seg[2] = {r->pts[tee[3 * k + 1]], r->pts[tee[3 * k + 2]]};
+        if (!(seen[tee[3 * k]] & PINCH) &&
+            !candidates(r, tee + 3 * k, 1, seg, 2, group++, &ps, &nps, &cap))
+            goto cleanup;
+    }
+    if (nps)
     {
         left = malloc(r->nrings * sizeof *left);
         mark = calloc(r->npts, 1);
-        gone = malloc(ncut * sizeof *gone);
-        if (!left || !mark || !gone || !check_empty(r, cuts, ncut))
+        gone = malloc(nps * sizeof *gone);
+        if (!left || !mark || !gone || !check_empty(r, ps, nps))
             goto cleanup;
         for (size_t ri = 0; ri < r->nrings; ri++)
             left[ri] = wm_rings_len(r, ri);
         size_t nmoved = 0;
         const size_t ngone =
-            apply_cuts(r, cuts, ncut, left, mark, gone, &nmoved);
+            apply_passes(r, ps, nps, left, mark, gone, &nmoved);
         qsort(gone, ngone, sizeof *gone, cmp_size);
         remove_vertices(r, gone, ngone);
         *nchanged = ngone + nmoved;
@@ -417,11 +553,14 @@ static int open_round(wm_rings *r, size_t *nchanged)
     ok = 1;
 cleanup:
     free(t.slot);
+    free(in);
     free(rep);
     free(key);
+    free(tee);
     free(left);
     free(mark);
-    free(cuts);
+    free(seen);
+    free(ps);
     free(gone);
     return ok;
 }

@@ -12,31 +12,36 @@ extern "C"
 #endif
 
     /**
-     * Opens every pinch of the rings: a lattice point that two or more
-     * passes of the boundary go through (one ring twice, or two rings).
+     * Opens every point where the rings touch: a lattice point that two or
+     * more passes of the boundary go through (one ring twice, or two
+     * rings: a pinch), or a vertex inside another ring's segment (a T).
      * Rounded to the lattice, two boundaries closer than a unit may meet
-     * at one point (crossings on a dividing segment, contour.c
-     * takes_before), where the rings touch without crossing: they break
-     * the wm_rings invariants (simple, pairwise disjoint) that
-     * simplification, nesting and the triangulation rely on.
+     * there (crossings on a dividing segment, contour.c takes_before;
+     * the pieces of a crowded cell), where the rings touch without
+     * crossing: they break the wm_rings invariants (simple, pairwise
+     * disjoint) that simplification, nesting and the triangulation rely
+     * on.
      *
-     * Rule: the contour links the passes at a pinch so that each bounds
-     * its own water wedge there, the wedges disjoint, so all but at most
-     * one pass turn left (their wedge is convex). All passes but one,
-     * each a -> P -> b turning left, are cut to a -> b: the water triangle
-     * (a, P, b) goes, the wedges no longer meet, and the change stays
-     * within the triangle (under a lattice cell at SIMPLIFY=0). A cut is
-     * made only where it is safe: no other vertex lies in the closed
-     * triangle (then no segment crosses a -> b either: it would have to
-     * end inside or cross a ring edge), the ring keeps three vertices, and
-     * no two cuts are neighbours in a ring. A pinch it cannot open (passes
-     * that do not turn left, as where rings made by hand overlap their
-     * wedges) is left as it is.
+     * Rule: a pass a -> P -> b that turns at P is moved into the convex
+     * side of its turn (its water wedge where it turns left, its land
+     * wedge where it turns right), to the first lattice point strictly
+     * inside the triangle (a, P, b) along the wedge's bisector (a unit or
+     * two), or cut to a -> b where there is none. All passes through a
+     * pinch but one move, the vertex of a T moves; a pass moves only where
+     * no other segment at P leaves into its wedge (then the passes no
+     * longer meet), no other vertex lies in the region it sweeps (then no
+     * segment crosses its new edges either: it would have to end there or
+     * cross a ring edge), a cut ring keeps three vertices, and no two
+     * moved vertices are neighbours in a ring (the next round takes the
+     * second, on the new rings). The contour links the passes at a pinch
+     * so that each bounds its own water wedge, the wedges disjoint: all
+     * but one turn left and may move. A point no pass may leave is left as
+     * it is.
      *
      * Cost: a hash of the vertices strictly inside cells of the sample
      * grid (on a sample row or column, the crossings of one cell side are
-     * distinct points by construction); the checks only where a pinch is
-     * found.
+     * distinct points by construction), and a grid of their segments; the
+     * checks only where a point is found.
      *
      * @param r   the rings, changed in place
      * @param ctx error sink, may be NULL
