@@ -532,9 +532,10 @@ def test_self_crossing_lake_pinches_opened(wm, tmp_path, seed, simplify):
     # test_self_crossing_lake_touches_itself measures a small one)
 
 
-# QA round 28's reduced cases, each a lake ring (or two) crammed into a few
+# QA round 28's cases, each a lake ring (or two) crammed into a few
 # hundredths of a pixel, where a vertex of one ring lies inside another
-# ring's segment (a T), with the options that stopped them
+# ring's segment (a T), or specks a unit across cross a segment
+# (simplify_cross), with the options that stopped them
 CRAMMED = {
     'cdt_t': ([[(400006.41015625, 4700011.43359375), (400006.453125, 4700011.45703125),
                 (400006.3984375, 4700011.4296875), (400006.421875, 4700011.42578125),
@@ -554,6 +555,19 @@ CRAMMED = {
                     [(400008.4680172994, 4700004.801023), (400008.47112700425, 4700004.795949061),
                      (400008.4678034558, 4700004.794166657), (400008.46262616944, 4700004.806410139)]],
                    {'PIXEL_SIZE': 0.25, 'BLOCK_SIZE': 16}),
+    'simplify_cross': ([[(400008.46463783353, 4700004.805740427), (400008.47125803103, 4700004.805544853),
+                         (400008.4701711877, 4700004.79334569), (400008.4623771286, 4700004.800301201),
+                         (400008.4613833691, 4700004.803341487), (400008.46185808105, 4700004.799481513),
+                         (400008.4649853268, 4700004.796495749), (400008.46462916775, 4700004.798222655),
+                         (400008.4638258364, 4700004.803411331), (400008.46832523786, 4700004.80615557),
+                         (400008.46267555957, 4700004.80184828), (400008.473304964, 4700004.804636008),
+                         (400008.46100781736, 4700004.806314861), (400008.4711322093, 4700004.803984799),
+                         (400008.4625868761, 4700004.80224758), (400008.4694976853, 4700004.800299493),
+                         (400008.46307703084, 4700004.798436954), (400008.47193558107, 4700004.798342012),
+                         (400008.4686042171, 4700004.794302194)],
+                        [(400008.4680172994, 4700004.801023), (400008.47112700425, 4700004.795949061),
+                         (400008.4678034558, 4700004.794166657), (400008.46262616944, 4700004.806410139)]],
+                       {'PIXEL_SIZE': 0.25, 'BLOCK_SIZE': 16, 'MIN_ANGLE': 20}),
     'fan_t': ([[(400088.46075025026, 4700110.789641385), (400088.51335571724, 4700110.725394001),
                 (400087.21778722596, 4700111.553073797), (400088.3656516461, 4700110.8808408035),
                 (400088.49138533016, 4700110.758725617), (400086.9298550918, 4700111.813764501),
@@ -571,7 +585,9 @@ CRAMMED = {
 def test_crammed_lake_tees_opened(wm, tmp_path, case):
     """A vertex inside another ring's segment (a T) stopped the CDT ("cdt:
     vertex lies on ring edge") or the simplifier ("input rings cross or
-    touch"); pinch.c moves the vertex into the convex side of its turn."""
+    touch"); pinch.c moves the vertex into the convex side of its turn.
+    Specks thinner than half a unit crossing a segment stopped the
+    simplifier; block.c drops them before it (drop_thin)."""
     from osgeo import ogr
     import scenes
     rings, opts = CRAMMED[case]

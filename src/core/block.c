@@ -73,16 +73,24 @@ static int thin_ring(const wm_rings *in, size_t i, int32_t S)
 {
     const wm_pt *p = in->pts + in->start[i];
     const size_t n = wm_rings_len(in, i);
-    double perim = 0;
+    int64_t l1 = 0; /* the perimeter in x and y: at least the perimeter */
     for (size_t k = 0; k < n; k++)
     {
         const wm_pt a = p[k], b = p[k + 1 < n ? k + 1 : 0];
         if (a.x == 0 || a.y == 0 || a.x == S || a.y == S)
             return 0;
+        l1 += llabs((int64_t)b.x - a.x) + llabs((int64_t)b.y - a.y);
+    }
+    const wm_i128 a2 = wm_ring_area2(p, n);
+    if ((a2 < 0 ? -a2 : a2) >= WM_THIN * (double)l1)
+        return 0; /* most rings: no square root */
+    double perim = 0;
+    for (size_t k = 0; k < n; k++)
+    {
+        const wm_pt a = p[k], b = p[k + 1 < n ? k + 1 : 0];
         const double dx = (double)b.x - a.x, dy = (double)b.y - a.y;
         perim += sqrt(dx * dx + dy * dy);
     }
-    const wm_i128 a2 = wm_ring_area2(p, n);
     return (double)(a2 < 0 ? -a2 : a2) < WM_THIN * perim;
 }
 
@@ -96,6 +104,31 @@ static void thin_rings(const wm_rings *in, const int32_t *enc, int32_t S,
     for (size_t i = 0; i < in->nrings; i++)
         for (int32_t j = enc[i]; j >= 0 && !drop[i]; j = enc[j])
             drop[i] = drop[j];
+}
+
+/* Removes, in place, the thin rings (thin_ring) before simplification:
+ * such specks (a unit across, left in a cell crowded with crossings) may
+ * cross another ring's segment, which the simplifier takes for a fault
+ * (QA round 28); thin_rings drops those that simplification thins. A ring
+ * thinner than half a unit holds no other. */
+static void drop_thin(wm_rings *r, int32_t S)
+{
+    size_t kept = 0, npts = 0;
+    if (r->nrings == 0)
+        return; /* no start[] yet */
+    for (size_t i = 0; i < r->nrings; i++)
+    {
+        const wm_pt *p = r->pts + r->start[i];
+        const size_t n = wm_rings_len(r, i);
+        if (thin_ring(r, i, S))
+            continue;
+        memmove(r->pts + npts, p, n * sizeof *p);
+        r->start[kept++] = npts;
+        npts += n;
+    }
+    r->start[kept] = npts;
+    r->nrings = kept;
+    r->npts = npts;
 }
 
 /* Groups rings into polygons: each outer ring (in ring order) followed by
@@ -429,7 +462,10 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     if (st == WM_OK)
         st = wm_rings_open_pinches(&raw, ctx);
     if (st == WM_OK)
+    {
         wm_rings_drop_small(&raw, s->n * WM_Q, opts->min_area);
+        drop_thin(&raw, s->n * WM_Q);
+    }
     double t2 = wm_now();
     res->seconds[WM_STAGE_EXTRACT] = t2 - t1;
     if (st != WM_OK)
