@@ -554,7 +554,7 @@ def test_block_cache_bounded(wm, random_scene):
     assert nsmall == nbig == {k: len(v) for k, v in big.items()}
 
 
-@pytest.mark.parametrize('value', ['abc', '-5', '12MB', 'nan', ''])
+@pytest.mark.parametrize('value', ['abc', '-5', '12MB', 'nan', '', ' ', 'inf'])
 def test_block_cache_max_garbage_refused(wm, simple_options, value):
     """WATERMESH_CACHE_MAX that is not a number of megabytes >= 0 fails the
     open, naming the option and the value (CPLAtof read 'abc' as 0 and

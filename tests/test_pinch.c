@@ -12,6 +12,9 @@
 #include <stdint.h>
 #include <string.h>
 
+/* The block square's side in these tests: far from every ring. */
+#define SIDE (1 << 20)
+
 /* Hand-made rings, moved by (O, O): off the sample grid's rows and
  * columns (multiples of WM_Q), where no vertex can repeat. */
 #define O 100
@@ -85,7 +88,8 @@ static void hole_touching_shell(void)
     ring(&r, touching, 8);
     TAP_EQ(repeats(&r), 1, "touching hole: one pinch before");
     const wm_i128 before = area2(&r);
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "touching hole: opened");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK,
+           "touching hole: opened");
     TAP_EQ(repeats(&r), 0, "touching hole: no pinch after");
     TAP_EQ(meetings(&r), 0, "touching hole: the ring is simple");
     TAP_EQ(r.npts, 8, "touching hole: one vertex moved, none cut");
@@ -105,7 +109,7 @@ static void two_lobes(void)
     memset(&r, 0, sizeof r);
     ring(&r, a, 4);
     ring(&r, b, 4);
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "two lobes: opened");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "two lobes: opened");
     TAP_EQ(repeats(&r), 0, "two lobes: no pinch after");
     TAP_EQ(meetings(&r), 0, "two lobes: rings disjoint");
     TAP_EQ(r.npts, 8, "two lobes: one vertex moved");
@@ -127,7 +131,8 @@ static void vertex_in_sweep(void)
     ring(&r, a, 4);
     ring(&r, b, 4);
     ring(&r, small, 3);
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "vertex in sweep: runs");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK,
+           "vertex in sweep: runs");
     TAP_EQ(repeats(&r), 0, "vertex in sweep: no pinch after");
     TAP_OK(r.pts[4].x == O + 10 && r.pts[4].y == O + 10 &&
                !(r.pts[1].x == O + 10 && r.pts[1].y == O + 10),
@@ -146,7 +151,7 @@ static void no_room_to_move(void)
     memset(&r, 0, sizeof r);
     ring(&r, a, 4);
     ring(&r, b, 4);
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "no room: runs");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "no room: runs");
     TAP_EQ(repeats(&r), 0, "no room: no pinch after");
     TAP_EQ(r.npts, 7, "no room: one vertex cut");
     TAP_EQ(meetings(&r), 0, "no room: disjoint");
@@ -164,7 +169,7 @@ static void hole_at_straight_side(void)
     memset(&r, 0, sizeof r);
     ring(&r, shell, 5);
     ring(&r, hole, 3);
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "hole at side: runs");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "hole at side: runs");
     TAP_EQ(repeats(&r), 0, "hole at side: no pinch after");
     TAP_EQ(meetings(&r), 0, "hole at side: disjoint");
     TAP_OK(r.pts[1].y == O && r.pts[5].y > O,
@@ -182,7 +187,7 @@ static void hole_on_edge(void)
     ring(&r, shell, 4);
     ring(&r, hole, 3);
     TAP_EQ(meetings(&r), 2, "T: the rings meet before");
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "T: runs");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "T: runs");
     TAP_EQ(meetings(&r), 0, "T: disjoint after");
     TAP_OK(r.npts == 7 && r.pts[4].y > O, "T: the hole's vertex moved up");
     int32_t enc[2];
@@ -202,7 +207,7 @@ static void blocked_wedge(void)
     memset(&r, 0, sizeof r);
     ring(&r, a, 5);
     ring(&r, b, 3);
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "blocked: runs");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "blocked: runs");
     TAP_OK(r.pts[1].x == O + 10 && r.pts[1].y == O + 10,
            "blocked: the hole's pass stays");
     TAP_OK(r.pts[5].y < O + 10, "blocked: the island's pass moves");
@@ -222,10 +227,98 @@ static void three_lobes(void)
     ring(&r, b, 4);
     ring(&r, c, 4);
     TAP_EQ(repeats(&r), 3, "three lobes: three pairs at one point");
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "three lobes: opened");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "three lobes: opened");
     TAP_EQ(repeats(&r), 0, "three lobes: none after");
     TAP_EQ(r.npts, 12, "three lobes: two passes moved");
     TAP_EQ(meetings(&r), 0, "three lobes: disjoint");
+    wm_rings_free(&r);
+}
+
+/* Whether two segments of different rings, or non-adjacent segments of
+ * one ring, lie along each other (overlap in more than a point). */
+static int overlaps(const wm_rings *r)
+{
+    int n = 0;
+    for (size_t a = 0; a < r->nrings; a++)
+        for (size_t i = r->start[a]; i < r->start[a + 1]; i++)
+        {
+            const size_t i1 = i + 1 < r->start[a + 1] ? i + 1 : r->start[a];
+            for (size_t b = 0; b < r->nrings; b++)
+                for (size_t j = r->start[b]; j < r->start[b + 1]; j++)
+                {
+                    const size_t j1 =
+                        j + 1 < r->start[b + 1] ? j + 1 : r->start[b];
+                    if (i == j)
+                        continue;
+                    const wm_pt p = r->pts[i], q = r->pts[i1];
+                    const wm_pt u = r->pts[j], v = r->pts[j1];
+                    if (wm_orient(p, q, u) == 0 && wm_orient(p, q, v) == 0 &&
+                        ((wm_on_segment(p, q, u) && !wm_pt_eq(u, p) &&
+                          !wm_pt_eq(u, q)) ||
+                         (wm_on_segment(p, q, v) && !wm_pt_eq(v, p) &&
+                          !wm_pt_eq(v, q))))
+                        n++;
+                }
+        }
+    return n;
+}
+
+/* Cases a reviewing helper found, where a cut laid its chord along a
+ * neighbouring segment or a block side, or a one-unit side kept a pass
+ * from moving. */
+static void review_cases(void)
+{
+    wm_rings r;
+    /* a T in ring 0 at (0, 5) and a pinch with ring 1 at (1, 1): cutting
+     * (1, 1) left 0,0 -> 0,5 folded back along 0,10 -> 0,0 */
+    memset(&r, 0, sizeof r);
+    ring(&r, (const int[]){0, 10, 0, 0, 1, 1, 0, 5, 1, 6}, 5);
+    ring(&r, (const int[]){1, 1, 3, 0, 3, 2}, 3);
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "fold: runs");
+    TAP_EQ(overlaps(&r), 0, "fold: no segment along another");
+    wm_rings_free(&r);
+    /* ring 1's vertices (0, 0) and (8, 0) on ring 0's edge: a cut of
+     * (4, 1) laid 0,0 -> 8,0 on it */
+    memset(&r, 0, sizeof r);
+    ring(&r, (const int[]){16, 0, -8, 0, 0, -8}, 3);
+    ring(&r, (const int[]){0, 0, 4, 1, 8, 0, 8, 6, 0, 6}, 5);
+    ring(&r, (const int[]){4, 1, 3, 3, 5, 3}, 3);
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "along: runs");
+    TAP_EQ(overlaps(&r), 0, "along: no segment along another");
+    TAP_EQ(meetings(&r), 0, "along: rings apart");
+    wm_rings_free(&r);
+    /* a pass whose side is one unit long moves to (1, 1) */
+    memset(&r, 0, sizeof r);
+    ring(&r, (const int[]){3, 10, 0, 0, 1, 0, 4, 11}, 4);
+    ring(&r, (const int[]){0, 0, -5, 2, -3, -4}, 3);
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "one unit: runs");
+    TAP_OK(r.npts == 7 && r.pts[1].x == O + 1 && r.pts[1].y == O + 1,
+           "one unit: moved, not cut");
+    wm_rings_free(&r);
+    /* a notch on the block side x = 0 touching a hole at (1, 11): a cut
+     * would run along the side */
+    memset(&r, 0, sizeof r);
+    const int notch[] = {0, 12, 1, 11, 0, 10, 0, 2, 10, 2, 10, 20, 0, 20};
+    for (int i = 0; i < 7; i++)
+    {
+        const wm_pt p = {notch[2 * i], 300 + notch[2 * i + 1]};
+        if (wm_rings_push(&r, p) != WM_OK)
+            abort();
+    }
+    if (wm_rings_close(&r) != WM_OK)
+        abort();
+    const int hole[] = {1, 11, 4, 13, 4, 9};
+    for (int i = 0; i < 3; i++)
+    {
+        const wm_pt p = {hole[2 * i], 300 + hole[2 * i + 1]};
+        if (wm_rings_push(&r, p) != WM_OK)
+            abort();
+    }
+    if (wm_rings_close(&r) != WM_OK)
+        abort();
+    TAP_EQ(wm_rings_open_pinches(&r, 256, NULL), WM_OK, "side: runs");
+    TAP_OK(r.npts == 10 && r.pts[1].x == 1, "side: the notch stays");
+    TAP_EQ(meetings(&r), 0, "side: rings apart");
     wm_rings_free(&r);
 }
 
@@ -353,7 +446,7 @@ static void random_images(int K)
         pinched += repeats(&r) > 0;
         const wm_i128 before = area2(&r);
         const size_t nrings = r.nrings;
-        if (wm_rings_open_pinches(&r, NULL) != WM_OK)
+        if (wm_rings_open_pinches(&r, SIDE, NULL) != WM_OK)
             abort();
         left += repeats(&r) > 0;
         crossing += meetings(&r) > 0;
@@ -386,7 +479,7 @@ static void no_pinch_unchanged(void)
     ring(&r, b, 4);
     wm_pt copy[8];
     memcpy(copy, r.pts, sizeof copy);
-    TAP_EQ(wm_rings_open_pinches(&r, NULL), WM_OK, "no pinch: runs");
+    TAP_EQ(wm_rings_open_pinches(&r, SIDE, NULL), WM_OK, "no pinch: runs");
     TAP_OK(r.npts == 8 && r.nrings == 2 &&
                memcmp(copy, r.pts, sizeof copy) == 0,
            "no pinch: rings unchanged");
@@ -404,6 +497,7 @@ int main(void)
     blocked_wedge();
     three_lobes();
     no_pinch_unchanged();
+    review_cases();
     random_images(8);
     random_images(3);
     return TAP_DONE();

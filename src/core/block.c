@@ -106,11 +106,35 @@ static void thin_rings(const wm_rings *in, const int32_t *enc, int32_t S,
             drop[i] = drop[j];
 }
 
-/* Removes, in place, the thin rings (thin_ring) before simplification:
- * such specks (a unit across, left in a cell crowded with crossings) may
- * cross another ring's segment, which the simplifier takes for a fault
- * (QA round 28); thin_rings drops those that simplification thins. A ring
- * thinner than half a unit holds no other. */
+/* Whether ring i holds no lattice point inside it: then it can hold no
+ * other ring. By Pick's theorem, twice its area is 2I + B - 2 for I points
+ * inside and B on it (B: the gcd of each edge's steps, summed). */
+static int holds_no_point(const wm_rings *in, size_t i)
+{
+    const wm_pt *p = in->pts + in->start[i];
+    const size_t n = wm_rings_len(in, i);
+    int64_t on = 0;
+    for (size_t k = 0; k < n; k++)
+    {
+        const wm_pt a = p[k], b = p[k + 1 < n ? k + 1 : 0];
+        int64_t x = llabs((int64_t)b.x - a.x), y = llabs((int64_t)b.y - a.y);
+        while (y)
+        {
+            const int64_t t = x % y;
+            x = y;
+            y = t;
+        }
+        on += x;
+    }
+    const wm_i128 a2 = wm_ring_area2(p, n);
+    return (a2 < 0 ? -a2 : a2) == (wm_i128)on - 2;
+}
+
+/* Removes, in place, the thin rings (thin_ring) that hold no lattice
+ * point (so no other ring) before simplification: such specks (a unit
+ * across, left in a cell crowded with crossings) may cross another ring's
+ * segment, which the simplifier takes for a fault (QA round 28);
+ * thin_rings drops the others, and those simplification thins, after. */
 static void drop_thin(wm_rings *r, int32_t S)
 {
     size_t kept = 0, npts = 0;
@@ -120,7 +144,7 @@ static void drop_thin(wm_rings *r, int32_t S)
     {
         const wm_pt *p = r->pts + r->start[i];
         const size_t n = wm_rings_len(r, i);
-        if (thin_ring(r, i, S))
+        if (thin_ring(r, i, S) && holds_no_point(r, i))
             continue;
         memmove(r->pts + npts, p, n * sizeof *p);
         r->start[kept++] = npts;
@@ -460,7 +484,7 @@ wm_status wm_block_finish(const wm_scene *s, int64_t bx, int64_t by,
     }
     wm_field_free(f);
     if (st == WM_OK)
-        st = wm_rings_open_pinches(&raw, ctx);
+        st = wm_rings_open_pinches(&raw, s->n * WM_Q, ctx);
     if (st == WM_OK)
     {
         wm_rings_drop_small(&raw, s->n * WM_Q, opts->min_area);

@@ -14,10 +14,11 @@
  * chosen among those that passed and moved or cut. A move or cut next to
  * another waits for a next round on the new rings.
  *
- * Complexity: O(n) for the filter, O(m) expected for the table of the m
- * vertices inside cells, once when there is no pinch;
- * where pinches exist, O(n log c) more per round for c candidates (rounds
- * are few: a round stops at neighbouring passes only).
+ * Complexity: per round, O(n) for the filter, O(m log m) for the table
+ * and the cell list of the m vertices inside cells and their segments
+ * (a few per cent of a block's); where points are found, O(n log c) more
+ * for c candidates. Rounds are few: a round stops only at neighbouring
+ * passes.
  *
  * Robustness: exact integer orientation tests (lattice.h) decide; doubles
  * only propose the point a pass moves to.
@@ -32,7 +33,7 @@
 
 #define FREE UINT32_MAX
 #define CELL_SHIFT 8 /* bucket of the emptiness check: a pixel */
-#define MOVED 1      /* mark of a vertex moved or pass */
+#define MOVED 1      /* mark of a vertex moved or cut */
 #define NEXT 2       /* mark of a neighbour of one */
 #define MAX_ROUNDS 64
 #define PINCH 1 /* a vertex at a pinch */
@@ -45,9 +46,10 @@ typedef struct
     size_t mask;
 } ptab;
 
-/* A pass through a pinch that may move: vertex i (at P) of ring r,
- * between vertices a and b, at a pinch of npass passes, to q (when moves;
- * else cut). */
+/* A pass through a pinch that may move: vertex i (at P) of ring r, whose
+ * ring neighbours a and b make the counter-clockwise triangle (a, P, b) on
+ * the convex side of its turn, at a pinch of npass passes, to q (when
+ * moves; else cut). */
 typedef struct
 {
     size_t i, a, b;
@@ -55,6 +57,12 @@ typedef struct
     wm_pt q;
     int moves, ok; /* ok: the region it sweeps holds no vertex */
 } pass;
+
+/* A T: vertex v inside the segment from vertex a to vertex b. */
+typedef struct
+{
+    size_t v, a, b;
+} tee;
 
 typedef struct
 {
@@ -93,6 +101,15 @@ static int cmp_size(const void *x, const void *y)
     return (a > b) - (a < b);
 }
 
+/* Pairs of sizes, by the first, then the second: a total order, so that
+ * the sort's result is one whatever the C library. */
+static int cmp_pair(const void *x, const void *y)
+{
+    const size_t *a = x, *b = y;
+    return a[0] != b[0] ? (a[0] > b[0]) - (a[0] < b[0])
+                        : (a[1] > b[1]) - (a[1] < b[1]);
+}
+
 static int cmp_cellref(const void *x, const void *y)
 {
     const cellref *a = x, *b = y;
@@ -129,8 +146,9 @@ static int inside_triangle(wm_pt a, wm_pt p, wm_pt b, wm_pt q)
 }
 
 /* The lattice point nearest p, along the bisector of the left turn
- * a -> p -> b, strictly inside triangle (a, p, b), into *q; 0 when the
- * steps of 1, 2, 3, 4, 6, 8, ... units up to the shorter side find none. */
+ * a -> p -> b, strictly inside triangle (a, p, b), into *q; 0 when steps
+ * of 1, 2, 3 and 4 units, then half as long again each time, up to the
+ * longer side find none (the bisector leaves the triangle before it). */
 static int move_to(wm_pt a, wm_pt p, wm_pt b, wm_pt *q)
 {
     const double ax = (double)a.x - p.x, ay = (double)a.y - p.y;
@@ -142,8 +160,8 @@ static int move_to(wm_pt a, wm_pt p, wm_pt b, wm_pt *q)
         return 0;
     ux /= lu;
     uy /= lu;
-    const double reach = la < lb ? la : lb;
-    for (double k = 1; k < reach; k = k < 4 ? k + 1 : k * 1.5)
+    const double reach = la > lb ? la : lb;
+    for (double k = 1; k <= reach; k = k < 4 ? k + 1 : k * 1.5)
     {
         q->x = p.x + (int32_t)lround(k * ux);
         q->y = p.y + (int32_t)lround(k * uy);
@@ -193,15 +211,9 @@ static int find_repeats(const wm_rings *r, ptab *t, uint32_t **in, size_t *nin,
             t->slot[h] = i;
             continue;
         }
-        if (*nrep == rcap)
-        {
-            rcap = rcap ? 2 * rcap : 16;
-            size_t *grown = realloc(*rep, rcap * sizeof *grown);
-            if (!grown)
-                return 0;
-            *rep = grown;
-        }
-        (*rep)[(*nrep)++] = i;
+        const size_t at = i;
+        if (!wm_push((void **)rep, nrep, &rcap, &at, sizeof at))
+            return 0;
     }
     return 1;
 }
@@ -224,15 +236,9 @@ static int add_cells(cellref **ref, size_t *n, size_t *cap, wm_pt a, wm_pt b,
     for (int32_t cx = x0; cx <= x1; cx++)
         for (int32_t cy = y0; cy <= y1; cy++)
         {
-            if (*n == *cap)
-            {
-                *cap = *cap ? 2 * *cap : 64;
-                cellref *grown = realloc(*ref, *cap * sizeof *grown);
-                if (!grown)
-                    return 0;
-                *ref = grown;
-            }
-            (*ref)[(*n)++] = (cellref){pack(cx, cy), item, item2};
+            const cellref c = {pack(cx, cy), item, item2};
+            if (!wm_push((void **)ref, n, cap, &c, sizeof c))
+                return 0;
         }
     return 1;
 }
@@ -255,12 +261,12 @@ static size_t first_in_cell(const cellref *ref, size_t n, wm_pt p)
 
 /* Step 1b: the vertices inside cells (in[0 .. nin)) that lie inside a
  * segment with an end inside a cell (a T: the boundary touches itself
- * there too), each with the segment's two vertices, into tee[0 .. 3
+ * there too), each with the segment's two vertices, into (*tees)[0 ..
  * *ntee). A segment through a vertex inside a
  * cell has such an end: marching squares' segments cross cells that hold
  * no other boundary. Returns 0 when out of memory. */
 static int find_tees(const wm_rings *r, const uint32_t *in, size_t nin,
-                     size_t **tee, size_t *ntee)
+                     tee **tees, size_t *ntee)
 {
     cellref *ref = NULL;
     size_t nref = 0, cap = 0, tcap = 0;
@@ -290,17 +296,9 @@ static int find_tees(const wm_rings *r, const uint32_t *in, size_t nin,
             const wm_pt pa = r->pts[ref[q].c], pb = r->pts[ref[q].c2];
             if (wm_pt_eq(v, pa) || wm_pt_eq(v, pb) || !wm_on_segment(pa, pb, v))
                 continue;
-            if (*ntee == tcap)
-            {
-                tcap = tcap ? 2 * tcap : 16;
-                size_t *grown = realloc(*tee, 3 * tcap * sizeof *grown);
-                if (!grown)
-                    goto cleanup;
-                *tee = grown;
-            }
-            (*tee)[3 * *ntee] = in[k];
-            (*tee)[3 * *ntee + 1] = ref[q].c;
-            (*tee)[3 * (*ntee)++ + 2] = ref[q].c2;
+            const tee t = {in[k], ref[q].c, ref[q].c2};
+            if (!wm_push((void **)tees, ntee, &tcap, &t, sizeof t))
+                goto cleanup;
             break;
         }
     }
@@ -326,17 +324,53 @@ static int in_wedge(wm_pt u, wm_pt p, wm_pt w, wm_pt e)
     return wm_orient(u, p, e) >= 0 && wm_orient(p, w, e) >= 0;
 }
 
+/* One round's state: the rings, the block square's side S, what each
+ * vertex is (seen: PINCH, TEE), and the candidates so far. */
+typedef struct
+{
+    wm_rings *r;
+    int32_t S;
+    uint8_t *seen;
+    pass *ps;
+    size_t nps, cap, group;
+} round_state;
+
+static int on_one_side(wm_pt a, wm_pt b, int32_t S)
+{
+    return (a.x == b.x && (a.x == 0 || a.x == S)) ||
+           (a.y == b.y && (a.y == 0 || a.y == S));
+}
+
+/* Whether the pass at vertex i (between ring neighbours a before and b
+ * after) may be cut to a -> b: neither end is a pinch or a T (where other
+ * segments meet it), the chord continues neither neighbouring segment
+ * (it would fold back onto one, or run along it), and it does not lie
+ * along a side of the block square (where the block across would not
+ * cover the same piece). */
+static int may_cut(const round_state *R, size_t a, size_t b)
+{
+    const wm_rings *r = R->r;
+    size_t aa, ab, ba, bb;
+    neighbours(r, a, &aa, &ab);
+    neighbours(r, b, &ba, &bb);
+    return !R->seen[a] && !R->seen[b] &&
+           wm_orient(r->pts[aa], r->pts[a], r->pts[b]) != 0 &&
+           wm_orient(r->pts[a], r->pts[b], r->pts[bb]) != 0 &&
+           !on_one_side(r->pts[a], r->pts[b], R->S);
+}
+
 /* Step 2: the candidates among the passes through one point P, at[0 ..
  * n), npass passes there in all (the segment through a T, from t0 to t1,
  * counts as one that does not move): each pass that turns at P, to move
  * into the convex side of its turn (its water wedge where it turns left,
  * its land wedge where it turns right), where no other segment at P leaves
- * into that wedge; with the point it would move to, numbered group.
- * Returns 0 when out of memory. */
-static int candidates(const wm_rings *r, const size_t *at, size_t n,
-                      const wm_pt *t, size_t npass, size_t group, pass **ps,
-                      size_t *nps, size_t *cap)
+ * into that wedge, with the point it would move to, or to be cut where
+ * there is none and may_cut allows. Returns 0 when out of memory. */
+static int candidates(round_state *R, const size_t *at, size_t n,
+                      const wm_pt *t, size_t npass)
 {
+    const wm_rings *r = R->r;
+    const size_t group = R->group++;
     for (size_t k = 0; k < n; k++)
     {
         const size_t i = at[k];
@@ -356,26 +390,20 @@ static int candidates(const wm_rings *r, const size_t *at, size_t n,
             clear = j == k || (!in_wedge(pu, p, pw, r->pts[x]) &&
                                !in_wedge(pu, p, pw, r->pts[y]));
         }
-        if (!clear)
+        pass c = {i, u, w, ring_of(r, i), group, npass, p, 0, 1};
+        c.moves = move_to(pu, p, pw, &c.q);
+        if (!clear || (!c.moves && !may_cut(R, a, b)))
             continue;
-        if (*nps == *cap)
-        {
-            *cap = *cap ? 2 * *cap : 16;
-            pass *grown = realloc(*ps, *cap * sizeof *grown);
-            if (!grown)
-                return 0;
-            *ps = grown;
-        }
-        pass *c = &(*ps)[(*nps)++];
-        *c = (pass){i, u, w, ring_of(r, i), group, npass, p, 0, 1};
-        c->moves = move_to(pu, p, pw, &c->q);
+        if (!wm_push((void **)&R->ps, &R->nps, &R->cap, &c, sizeof c))
+            return 0;
     }
     return 1;
 }
 
 /* Step 3: every candidate that sweeps a vertex other than its own three
  * points is given up: a move sweeps its closed triangle less the open one
- * (a, q, b), a cut the closed triangle. Returns 0 when out of memory. */
+ * (a, q, b) and the open chord a -> b, a cut the closed triangle. Returns
+ * 0 when out of memory. */
 static int check_empty(const wm_rings *r, pass *ps, size_t nps)
 {
     size_t nref = 0, cap = 0;
@@ -411,7 +439,8 @@ static int check_empty(const wm_rings *r, pass *ps, size_t nps)
             const wm_pt a = r->pts[c->a], p = r->pts[c->i], b = r->pts[c->b];
             if (c->ok && !wm_pt_eq(v, a) && !wm_pt_eq(v, p) &&
                 !wm_pt_eq(v, b) && in_triangle(a, p, b, v) &&
-                !(c->moves && inside_triangle(a, c->q, b, v)))
+                !(c->moves &&
+                  (inside_triangle(a, c->q, b, v) || wm_on_segment(a, b, v))))
                 c->ok = 0;
         }
     }
@@ -481,41 +510,29 @@ static void remove_vertices(wm_rings *r, const size_t *gone, size_t n)
     r->npts = w;
 }
 
-/* One round: the pinches found, and the passes that may be moved or cut
- * there moved or cut; *nchanged: how many. Returns 0 when out of
- * memory. */
-static int open_round(wm_rings *r, size_t *nchanged)
+/* Step 2 for every point found: the passes through each pinch (its first
+ * vertex, then its repeats, sorted by that first vertex), and the vertex
+ * of each T. A point that is both a pinch and a T waits (no candidate
+ * weighs both). Returns 0 when out of memory. */
+static int all_candidates(round_state *R, const ptab *t, const size_t *rep,
+                          size_t nrep, const tee *tees, size_t ntee)
 {
-    ptab t = {NULL, 0};
-    uint32_t *in = NULL;
-    size_t *rep = NULL, *key = NULL, *tee = NULL, *left = NULL, *gone = NULL;
-    size_t nin = 0, nrep = 0, ntee = 0, nps = 0, cap = 0, group = 0;
-    uint8_t *mark = NULL, *seen = NULL; /* seen: PINCH, TEE */
-    pass *ps = NULL;
-    int ok = 0;
-    *nchanged = 0;
-    if (!find_repeats(r, &t, &in, &nin, &rep, &nrep) ||
-        !find_tees(r, in, nin, &tee, &ntee))
-        goto cleanup;
-    /* the passes through each pinch: its first vertex, then its repeats
-     * (sorted by that first vertex); a point that is both a pinch and a T
-     * waits (no candidate weighs both) */
-    if ((nrep || ntee) && !(seen = calloc(r->npts, 1)))
-        goto cleanup;
-    if (nrep && !(key = malloc((3 * nrep + 1) * sizeof *key)))
-        goto cleanup;
+    const wm_rings *r = R->r;
+    size_t *key = malloc((3 * nrep + 1) * sizeof *key);
+    if (!key)
+        return 0;
     for (size_t k = 0; k < nrep; k++)
     {
         size_t h;
-        key[2 * k] = ptab_find(&t, r->pts, r->pts[rep[k]], &h);
+        key[2 * k] = ptab_find(t, r->pts, r->pts[rep[k]], &h);
         key[2 * k + 1] = rep[k];
-        seen[key[2 * k]] = seen[rep[k]] = PINCH;
+        R->seen[key[2 * k]] = R->seen[rep[k]] = PINCH;
     }
     for (size_t k = 0; k < ntee; k++)
-        seen[tee[3 * k]] |= TEE;
-    if (nrep)
-        qsort(key, nrep, 2 * sizeof *key, cmp_size);
-    for (size_t lo = 0, hi; lo < nrep; lo = hi)
+        R->seen[tees[k].v] |= TEE;
+    qsort(key, nrep, 2 * sizeof *key, cmp_pair);
+    int ok = 1;
+    for (size_t lo = 0, hi; ok && lo < nrep; lo = hi)
     {
         size_t *at = key + 2 * nrep, n = 0;
         int both = 0;
@@ -523,29 +540,51 @@ static int open_round(wm_rings *r, size_t *nchanged)
         for (hi = lo; hi < nrep && key[2 * hi] == key[2 * lo]; hi++)
             at[n++] = key[2 * hi + 1];
         for (size_t k = 0; k < n; k++)
-            both |= seen[at[k]] & TEE;
-        if (!both && !candidates(r, at, n, NULL, n, group++, &ps, &nps, &cap))
-            goto cleanup;
+            both |= R->seen[at[k]] & TEE;
+        ok = both || candidates(R, at, n, NULL, n);
     }
-    for (size_t k = 0; k < ntee; k++)
+    free(key);
+    for (size_t k = 0; ok && k < ntee; k++)
     {
-        const wm_pt seg[2] = {r->pts[tee[3 * k + 1]], r->pts[tee[3 * k + 2]]};
-        if (!(seen[tee[3 * k]] & PINCH) &&
-            !candidates(r, tee + 3 * k, 1, seg, 2, group++, &ps, &nps, &cap))
-            goto cleanup;
+        const wm_pt seg[2] = {r->pts[tees[k].a], r->pts[tees[k].b]};
+        ok = (R->seen[tees[k].v] & PINCH) ||
+             candidates(R, &tees[k].v, 1, seg, 2);
     }
-    if (nps)
+    return ok;
+}
+
+/* One round: the points where the rings touch found, and the passes that
+ * may be moved or cut there moved or cut; *nchanged: how many. Returns 0
+ * when out of memory. */
+static int open_round(wm_rings *r, int32_t S, size_t *nchanged)
+{
+    ptab t = {NULL, 0};
+    uint32_t *in = NULL;
+    size_t *rep = NULL, *left = NULL, *gone = NULL;
+    tee *tees = NULL;
+    size_t nin = 0, nrep = 0, ntee = 0;
+    uint8_t *mark = NULL;
+    round_state R = {r, S, NULL, NULL, 0, 0, 0};
+    int ok = 0;
+    *nchanged = 0;
+    if (!find_repeats(r, &t, &in, &nin, &rep, &nrep) ||
+        !find_tees(r, in, nin, &tees, &ntee))
+        goto cleanup;
+    if ((nrep || ntee) && (!(R.seen = calloc(r->npts, 1)) ||
+                           !all_candidates(&R, &t, rep, nrep, tees, ntee)))
+        goto cleanup;
+    if (R.nps)
     {
         left = malloc(r->nrings * sizeof *left);
         mark = calloc(r->npts, 1);
-        gone = malloc(nps * sizeof *gone);
-        if (!left || !mark || !gone || !check_empty(r, ps, nps))
+        gone = malloc(R.nps * sizeof *gone);
+        if (!left || !mark || !gone || !check_empty(r, R.ps, R.nps))
             goto cleanup;
         for (size_t ri = 0; ri < r->nrings; ri++)
             left[ri] = wm_rings_len(r, ri);
         size_t nmoved = 0;
         const size_t ngone =
-            apply_passes(r, ps, nps, left, mark, gone, &nmoved);
+            apply_passes(r, R.ps, R.nps, left, mark, gone, &nmoved);
         qsort(gone, ngone, sizeof *gone, cmp_size);
         remove_vertices(r, gone, ngone);
         *nchanged = ngone + nmoved;
@@ -555,17 +594,16 @@ cleanup:
     free(t.slot);
     free(in);
     free(rep);
-    free(key);
-    free(tee);
+    free(tees);
     free(left);
     free(mark);
-    free(seen);
-    free(ps);
+    free(R.seen);
+    free(R.ps);
     free(gone);
     return ok;
 }
 
-wm_status wm_rings_open_pinches(wm_rings *r, const wm_ctx *ctx)
+wm_status wm_rings_open_pinches(wm_rings *r, int32_t S, const wm_ctx *ctx)
 {
     if (r->npts >= FREE)
         return wm_fail(ctx, WM_ERR_NOMEM, "pinch: too many vertices");
@@ -573,7 +611,7 @@ wm_status wm_rings_open_pinches(wm_rings *r, const wm_ctx *ctx)
      * new rings; each round that changes a pass opens a pinch */
     size_t nchanged = 1;
     for (int round = 0; round < MAX_ROUNDS && nchanged > 0 && r->npts; round++)
-        if (!open_round(r, &nchanged))
+        if (!open_round(r, S, &nchanged))
             return wm_fail(ctx, WM_ERR_NOMEM,
                            "out of memory opening pinch points");
     return WM_OK;

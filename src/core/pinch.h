@@ -12,9 +12,10 @@ extern "C"
 #endif
 
     /**
-     * Opens every point where the rings touch: a lattice point that two or
-     * more passes of the boundary go through (one ring twice, or two
-     * rings: a pinch), or a vertex inside another ring's segment (a T).
+     * Opens the points where the rings touch: a lattice point strictly
+     * inside a cell of the sample grid that two or more passes of the
+     * boundary go through (one ring twice, or two rings: a pinch), or
+     * such a vertex inside another ring's segment (a T).
      * Rounded to the lattice, two boundaries closer than a unit may meet
      * there (crossings on a dividing segment, contour.c takes_before;
      * the pieces of a crowded cell), where the rings touch without
@@ -35,8 +36,11 @@ extern "C"
      * moved vertices are neighbours in a ring (the next round takes the
      * second, on the new rings). The contour links the passes at a pinch
      * so that each bounds its own water wedge, the wedges disjoint: all
-     * but one turn left and may move. A point no pass may leave is left as
-     * it is.
+     * but one turn left and may move. A point no pass may leave, and one
+     * that is both a pinch and a T, is left as it is (the CDT or the
+     * simplifier then reports it). A cut is made only where neither end of
+     * the chord is a pinch or a T, the chord continues neither neighbouring
+     * segment, and it does not run along a side of the block square.
      *
      * Cost: a hash of the vertices strictly inside cells of the sample
      * grid (on a sample row or column, the crossings of one cell side are
@@ -44,10 +48,12 @@ extern "C"
      * checks only where a point is found.
      *
      * @param r   the rings, changed in place
+     * @param S   the block square's side (lattice units): no cut runs
+     *            along it
      * @param ctx error sink, may be NULL
      * @return WM_OK, WM_ERR_NOMEM
      */
-    wm_status wm_rings_open_pinches(wm_rings *r, const wm_ctx *ctx);
+    wm_status wm_rings_open_pinches(wm_rings *r, int32_t S, const wm_ctx *ctx);
 
 #ifdef __cplusplus
 }

@@ -590,11 +590,15 @@ int WaterMeshDataset::Identify(GDALOpenInfo *poOpenInfo)
 static bool CacheMaxFromConfig(size_t *pnBytes)
 {
     const char *pszVal = CPLGetConfigOption("WATERMESH_CACHE_MAX", "512");
+    const char *pszNum = pszVal;
+    while (*pszNum == ' ' || *pszNum == '\t')
+        pszNum++;
     char *pszEnd = nullptr;
-    const double dfMB = CPLStrtod(pszVal, &pszEnd);
+    const double dfMB = CPLStrtod(pszNum, &pszEnd);
     while (pszEnd && (*pszEnd == ' ' || *pszEnd == '\t'))
         pszEnd++;
-    if (pszEnd == pszVal || !pszEnd || *pszEnd != '\0' || !(dfMB >= 0))
+    if (*pszNum == '\0' || pszEnd == pszNum || !pszEnd || *pszEnd != '\0' ||
+        !(dfMB >= 0) || !std::isfinite(dfMB))
     {
         CPLError(CE_Failure, CPLE_IllegalArg,
                  "WATERMESH: WATERMESH_CACHE_MAX=%s is not a number of "
@@ -602,7 +606,9 @@ static bool CacheMaxFromConfig(size_t *pnBytes)
                  pszVal);
         return false;
     }
-    *pnBytes = static_cast<size_t>(std::min(dfMB * 1048576.0, 1e15));
+    /* at most 1e15 bytes, which size_t holds on 32-bit hosts too */
+    const double dfMax = std::min(1e15, static_cast<double>(SIZE_MAX));
+    *pnBytes = static_cast<size_t>(std::min(dfMB * 1048576.0, dfMax));
     return true;
 }
 
