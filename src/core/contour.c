@@ -40,6 +40,7 @@
  */
 #include "contour.h"
 
+#include "lattice.h"
 #include "subpixel.h"
 
 #include <stdlib.h>
@@ -232,21 +233,9 @@ static int cmp_entry(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* A crossing identifies the link between the two segments that share it:
- * it lies on one cell edge (or inside an ambiguous cell) and both compute
- * it alike. */
-static uint64_t pt_key(wm_pt p)
-{
-    return (uint64_t)(uint32_t)p.x << 32 | (uint32_t)p.y;
-}
-
-static size_t hash64(uint64_t k, size_t mask)
-{
-    k ^= k >> 33;
-    k *= UINT64_C(0xff51afd7ed558ccd);
-    k ^= k >> 33;
-    return (size_t)k & mask;
-}
+/* A crossing identifies the link between the two segments that share it
+ * (wm_pt_key): it lies on one cell edge (or inside an ambiguous cell) and
+ * both compute it alike. */
 
 /* The cell across side `side` of cell (c, r). */
 static const int32_t side_dc[4] = {0, 1, 0, -1}, side_dr[4] = {-1, 0, 1, 0};
@@ -494,7 +483,7 @@ static int link_across(state *s, const size_t *bnd, size_t nbnd)
         const size_t i = bnd[b];
         if (!crosses_tile(s, i, 1))
             continue;
-        size_t h = hash64(pt_key(s->segs[i].in_pt), hcap - 1);
+        size_t h = wm_hash64(wm_pt_key(s->segs[i].in_pt), hcap - 1);
         while (slot[h] != SIZE_MAX)
             h = (h + 1) & (hcap - 1);
         slot[h] = i;
@@ -504,11 +493,11 @@ static int link_across(state *s, const size_t *bnd, size_t nbnd)
         const size_t i = bnd[b];
         if (!crosses_tile(s, i, 0))
             continue;
-        const uint64_t key = pt_key(s->segs[i].out_pt);
+        const uint64_t key = wm_pt_key(s->segs[i].out_pt);
         size_t best = SIZE_MAX;
-        for (size_t h = hash64(key, hcap - 1); slot[h] != SIZE_MAX;
+        for (size_t h = wm_hash64(key, hcap - 1); slot[h] != SIZE_MAX;
              h = (h + 1) & (hcap - 1))
-            if (pt_key(s->segs[slot[h]].in_pt) == key &&
+            if (wm_pt_key(s->segs[slot[h]].in_pt) == key &&
                 (best == SIZE_MAX || takes_before(s, i, slot[h], best)))
                 best = slot[h];
         if (best != SIZE_MAX)

@@ -40,6 +40,23 @@ extern "C"
         return a.x == b.x && a.y == b.y;
     }
 
+    /** A point as one 64-bit key, x in the high half (equal keys, equal
+     *  points). */
+    static inline uint64_t wm_pt_key(wm_pt p)
+    {
+        return (uint64_t)(uint32_t)p.x << 32 | (uint32_t)p.y;
+    }
+
+    /** Key k mixed (MurmurHash3's finalizer, its first half) into a slot of
+     *  an open-addressing table of mask + 1 slots (a power of two). */
+    static inline size_t wm_hash64(uint64_t k, size_t mask)
+    {
+        k ^= k >> 33;
+        k *= UINT64_C(0xff51afd7ed558ccd);
+        k ^= k >> 33;
+        return (size_t)k & mask;
+    }
+
     /** Lexicographic order of points (x, then y): -1, 0 or 1. */
     static inline int wm_pt_cmp(wm_pt a, wm_pt b)
     {

@@ -70,25 +70,17 @@ typedef struct
     size_t c, c2; /* the item: a pass (c), or a segment (c to c2) */
 } cellref;
 
-/* Two 32-bit coordinates in one key. */
-static uint64_t pack(int32_t x, int32_t y)
+/* The key of the grid cell (a pixel) holding p. */
+static uint64_t cell_key(wm_pt p)
 {
-    return (uint64_t)(uint32_t)x << 32 | (uint32_t)y;
-}
-
-static size_t pt_hash(wm_pt p, size_t mask)
-{
-    uint64_t k = pack(p.x, p.y);
-    k ^= k >> 33;
-    k *= 0xff51afd7ed558ccdULL;
-    k ^= k >> 33;
-    return (size_t)k & mask;
+    const wm_pt c = {p.x >> CELL_SHIFT, p.y >> CELL_SHIFT};
+    return wm_pt_key(c);
 }
 
 /* The first vertex at p's point (FREE when none yet); *h its slot. */
 static uint32_t ptab_find(const ptab *t, const wm_pt *pts, wm_pt p, size_t *h)
 {
-    size_t k = pt_hash(p, t->mask);
+    size_t k = wm_hash64(wm_pt_key(p), t->mask);
     while (t->slot[k] != FREE && !wm_pt_eq(pts[t->slot[k]], p))
         k = (k + 1) & t->mask;
     *h = k;
@@ -236,7 +228,8 @@ static int add_cells(cellref **ref, size_t *n, size_t *cap, wm_pt a, wm_pt b,
     for (int32_t cx = x0; cx <= x1; cx++)
         for (int32_t cy = y0; cy <= y1; cy++)
         {
-            const cellref c = {pack(cx, cy), item, item2};
+            const wm_pt at = {cx, cy};
+            const cellref c = {wm_pt_key(at), item, item2};
             if (!wm_push((void **)ref, n, cap, &c, sizeof c))
                 return 0;
         }
@@ -246,7 +239,7 @@ static int add_cells(cellref **ref, size_t *n, size_t *cap, wm_pt a, wm_pt b,
 /* The first of ref[0 .. n) (sorted) in the cell of p. */
 static size_t first_in_cell(const cellref *ref, size_t n, wm_pt p)
 {
-    const uint64_t key = pack(p.x >> CELL_SHIFT, p.y >> CELL_SHIFT);
+    const uint64_t key = cell_key(p);
     size_t lo = 0, hi = n;
     while (lo < hi)
     {
@@ -289,7 +282,7 @@ static int find_tees(const wm_rings *r, const uint32_t *in, size_t nin,
     for (size_t k = 0; k < nin; k++)
     {
         const wm_pt v = r->pts[in[k]];
-        const uint64_t key = pack(v.x >> CELL_SHIFT, v.y >> CELL_SHIFT);
+        const uint64_t key = cell_key(v);
         for (size_t q = first_in_cell(ref, nref, v);
              q < nref && ref[q].cell == key; q++)
         {
@@ -431,7 +424,7 @@ static int check_empty(const wm_rings *r, pass *ps, size_t nps)
     for (size_t q = 0; q < r->npts; q++)
     {
         const wm_pt v = r->pts[q];
-        const uint64_t key = pack(v.x >> CELL_SHIFT, v.y >> CELL_SHIFT);
+        const uint64_t key = cell_key(v);
         for (size_t k = first_in_cell(ref, nref, v);
              k < nref && ref[k].cell == key; k++)
         {
