@@ -606,7 +606,7 @@ static bool CacheMaxFromConfig(size_t *pnBytes)
                  pszVal);
         return false;
     }
-    /* at most 1e15 bytes, which size_t holds on 32-bit hosts too */
+    /* at most 1e15 bytes, and never more than size_t holds */
     const double dfMax = std::min(1e15, static_cast<double>(SIZE_MAX));
     *pnBytes = static_cast<size_t>(std::min(dfMB * 1048576.0, dfMax));
     return true;
