@@ -233,10 +233,6 @@ static int cmp_entry(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* A crossing identifies the link between the two segments that share it
- * (wm_pt_key): it lies on one cell edge (or inside an ambiguous cell) and
- * both compute it alike. */
-
 /* The cell across side `side` of cell (c, r). */
 static const int32_t side_dc[4] = {0, 1, 0, -1}, side_dr[4] = {-1, 0, 1, 0};
 
@@ -467,7 +463,9 @@ static int takes_before(const state *s, size_t i, size_t j, size_t k)
 
 /* Step 2b: links the segments of bnd[0 .. nbnd) whose out edge crosses
  * into another tile (or an ambiguous cell) to the one whose in edge is the
- * same crossing, through an open-addressing hash; 0 when out of memory. */
+ * same crossing, through an open-addressing hash of the crossings
+ * (wm_pt_key: a crossing lies on one cell edge, or inside an ambiguous
+ * cell, and both segments compute it alike); 0 when out of memory. */
 static int link_across(state *s, const size_t *bnd, size_t nbnd)
 {
     size_t hcap = 16;

@@ -4,13 +4,13 @@
  * Method (pinch.h has the rule): every vertex strictly inside a cell of the
  * sample grid (no other may repeat, in_cell) goes into an open-addressing
  * table keyed by its lattice point; a point met twice is a pinch. Their
- * segments go into a sorted list of the grid cells their boxes cover; a
+ * segments go into a grid of pixel cells (wm_cells) by their boxes; a
  * vertex inside one of them is a T. The passes through each such point
  * that may move are candidates, each with the lattice point it would move
  * to (the first one strictly inside its triangle along the wedge's
  * bisector) or none (then it would be cut); the regions they sweep are
- * checked empty by one pass over the vertices (the same cell list, of the
- * triangles' boxes); all passes but one per pinch (the vertex of a T) are
+ * checked empty by one pass over the vertices (a grid of the triangles'
+ * boxes); all passes but one per pinch (the vertex of a T) are
  * chosen among those that passed and moved or cut. A move or cut next to
  * another waits for a next round on the new rings.
  *
@@ -32,9 +32,8 @@
 #include <string.h>
 
 #define FREE UINT32_MAX
-#define CELL_SHIFT 8 /* bucket of the emptiness check: a pixel */
-#define MOVED 1      /* mark of a vertex moved or cut */
-#define NEXT 2       /* mark of a neighbour of one */
+#define MOVED 1 /* mark of a vertex moved or cut */
+#define NEXT 2  /* mark of a neighbour of one */
 #define MAX_ROUNDS 64
 #define PINCH 1 /* a vertex at a pinch */
 #define TEE 2   /* a vertex inside another segment */
@@ -64,18 +63,14 @@ typedef struct
     size_t v, a, b;
 } tee;
 
+/* Items by grid cell over the block square (wm_cells), cells of cs
+ * lattice units (a pixel, or more where the grid would pass 65535 cells a
+ * side). */
 typedef struct
 {
-    uint64_t cell;
-    size_t c, c2; /* the item: a pass (c), or a segment (c to c2) */
-} cellref;
-
-/* The key of the grid cell (a pixel) holding p. */
-static uint64_t cell_key(wm_pt p)
-{
-    const wm_pt c = {p.x >> CELL_SHIFT, p.y >> CELL_SHIFT};
-    return wm_pt_key(c);
-}
+    wm_cells g;
+    int32_t cs;
+} grid;
 
 /* The first vertex at p's point (FREE when none yet); *h its slot. */
 static uint32_t ptab_find(const ptab *t, const wm_pt *pts, wm_pt p, size_t *h)
@@ -100,12 +95,6 @@ static int cmp_pair(const void *x, const void *y)
     const size_t *a = x, *b = y;
     return a[0] != b[0] ? (a[0] > b[0]) - (a[0] < b[0])
                         : (a[1] > b[1]) - (a[1] < b[1]);
-}
-
-static int cmp_cellref(const void *x, const void *y)
-{
-    const cellref *a = x, *b = y;
-    return (a->cell > b->cell) - (a->cell < b->cell);
 }
 
 /* The ring holding vertex i. */
@@ -216,40 +205,42 @@ static size_t next_of(const wm_rings *r, size_t ri, size_t i)
     return i + 1 < r->start[ri + 1] ? i + 1 : r->start[ri];
 }
 
-/* Appends (cell, item, item2) for every grid cell the box of a and b covers;
- * returns 0 when out of memory. */
-static int add_cells(cellref **ref, size_t *n, size_t *cap, wm_pt a, wm_pt b,
-                     size_t item, size_t item2)
+static void grid_init(grid *G, int32_t S)
 {
-    const int32_t x0 = (a.x < b.x ? a.x : b.x) >> CELL_SHIFT;
-    const int32_t x1 = (a.x < b.x ? b.x : a.x) >> CELL_SHIFT;
-    const int32_t y0 = (a.y < b.y ? a.y : b.y) >> CELL_SHIFT;
-    const int32_t y1 = (a.y < b.y ? b.y : a.y) >> CELL_SHIFT;
-    for (int32_t cx = x0; cx <= x1; cx++)
-        for (int32_t cy = y0; cy <= y1; cy++)
-        {
-            const wm_pt at = {cx, cy};
-            const cellref c = {wm_pt_key(at), item, item2};
-            if (!wm_push((void **)ref, n, cap, &c, sizeof c))
+    memset(G, 0, sizeof *G);
+    G->cs = WM_Q;
+    while (S / G->cs + 1 > 65535)
+        G->cs *= 2;
+    wm_cells_reset(&G->g, S / G->cs + 1);
+}
+
+/* The cell holding coordinate x, clamped to the grid. */
+static int32_t grid_cell(const grid *G, int32_t x)
+{
+    const int32_t c = x < 0 ? 0 : x / G->cs;
+    return c < G->g.side ? c : G->g.side - 1;
+}
+
+/* Adds item to every cell the box of a and b covers; 0 when out of
+ * memory. */
+static int grid_add(grid *G, wm_pt a, wm_pt b, uint32_t item)
+{
+    const int32_t x0 = grid_cell(G, a.x < b.x ? a.x : b.x);
+    const int32_t x1 = grid_cell(G, a.x < b.x ? b.x : a.x);
+    const int32_t y0 = grid_cell(G, a.y < b.y ? a.y : b.y);
+    const int32_t y1 = grid_cell(G, a.y < b.y ? b.y : a.y);
+    for (int32_t cy = y0; cy <= y1; cy++)
+        for (int32_t cx = x0; cx <= x1; cx++)
+            if (!wm_cells_add(&G->g, cx, cy, item))
                 return 0;
-        }
     return 1;
 }
 
-/* The first of ref[0 .. n) (sorted) in the cell of p. */
-static size_t first_in_cell(const cellref *ref, size_t n, wm_pt p)
+/* The items of the cell holding p: G->g.item[*b .. *e). */
+static void grid_at(const grid *G, wm_pt p, size_t *b, size_t *e)
 {
-    const uint64_t key = cell_key(p);
-    size_t lo = 0, hi = n;
-    while (lo < hi)
-    {
-        const size_t mid = lo + (hi - lo) / 2;
-        if (ref[mid].cell < key)
-            lo = mid + 1;
-        else
-            hi = mid;
-    }
-    return lo;
+    const int32_t cx = grid_cell(G, p.x);
+    wm_cells_row(&G->g, grid_cell(G, p.y), cx, cx, b, e);
 }
 
 /* Step 1b: the vertices inside cells (in[0 .. nin)) that lie inside a
@@ -258,12 +249,15 @@ static size_t first_in_cell(const cellref *ref, size_t n, wm_pt p)
  * *ntee). A segment through a vertex inside a
  * cell has such an end: marching squares' segments cross cells that hold
  * no other boundary. Returns 0 when out of memory. */
-static int find_tees(const wm_rings *r, const uint32_t *in, size_t nin,
-                     tee **tees, size_t *ntee)
+static int find_tees(const wm_rings *r, int32_t S, const uint32_t *in,
+                     size_t nin, tee **tees, size_t *ntee)
 {
-    cellref *ref = NULL;
-    size_t nref = 0, cap = 0, tcap = 0;
+    grid G;
+    size_t *seg = NULL, nseg = 0, scap = 0, tcap = 0; /* pairs a, b */
     int ok = 0;
+    if (nin < 2)
+        return 1; /* a T needs a segment with an end inside a cell too */
+    grid_init(&G, S);
     for (size_t k = 0, ri = 0; k < nin; k++)
     {
         const size_t i = in[k]; /* ascending: so are the rings */
@@ -272,24 +266,29 @@ static int find_tees(const wm_rings *r, const uint32_t *in, size_t nin,
         const size_t j = next_of(r, ri, i);
         const size_t h = i > r->start[ri] ? i - 1 : r->start[ri + 1] - 1;
         /* segments i -> j, and h -> i unless h lists it */
-        if (!add_cells(&ref, &nref, &cap, r->pts[i], r->pts[j], i, j) ||
-            (!in_cell(r->pts[h]) &&
-             !add_cells(&ref, &nref, &cap, r->pts[h], r->pts[i], h, i)))
-            goto cleanup;
+        const size_t ends[4] = {i, j, h, i};
+        for (int e = 0; e < (in_cell(r->pts[h]) ? 2 : 4); e += 2)
+            if (!wm_push((void **)&seg, &nseg, &scap, &ends[e], sizeof *ends) ||
+                !wm_push((void **)&seg, &nseg, &scap, &ends[e + 1],
+                         sizeof *ends) ||
+                !grid_add(&G, r->pts[ends[e]], r->pts[ends[e + 1]],
+                          (uint32_t)(nseg / 2 - 1)))
+                goto cleanup;
     }
-    if (nref)
-        qsort(ref, nref, sizeof *ref, cmp_cellref);
+    if (wm_cells_index(&G.g) != WM_OK)
+        goto cleanup;
     for (size_t k = 0; k < nin; k++)
     {
         const wm_pt v = r->pts[in[k]];
-        const uint64_t key = cell_key(v);
-        for (size_t q = first_in_cell(ref, nref, v);
-             q < nref && ref[q].cell == key; q++)
+        size_t b, e;
+        grid_at(&G, v, &b, &e);
+        for (; b < e; b++)
         {
-            const wm_pt pa = r->pts[ref[q].c], pb = r->pts[ref[q].c2];
+            const size_t *sg = seg + 2 * G.g.item[b];
+            const wm_pt pa = r->pts[sg[0]], pb = r->pts[sg[1]];
             if (wm_pt_eq(v, pa) || wm_pt_eq(v, pb) || !wm_on_segment(pa, pb, v))
                 continue;
-            const tee t = {in[k], ref[q].c, ref[q].c2};
+            const tee t = {in[k], sg[0], sg[1]};
             if (!wm_push((void **)tees, ntee, &tcap, &t, sizeof t))
                 goto cleanup;
             break;
@@ -297,7 +296,8 @@ static int find_tees(const wm_rings *r, const uint32_t *in, size_t nin,
     }
     ok = 1;
 cleanup:
-    free(ref);
+    free(seg);
+    wm_cells_free(&G.g);
     return ok;
 }
 
@@ -397,38 +397,32 @@ static int candidates(round_state *R, const size_t *at, size_t n,
  * points is given up: a move sweeps its closed triangle less the open one
  * (a, q, b) and the open chord a -> b, a cut the closed triangle. Returns
  * 0 when out of memory. */
-static int check_empty(const wm_rings *r, pass *ps, size_t nps)
+static int check_empty(const wm_rings *r, int32_t S, pass *ps, size_t nps)
 {
-    size_t nref = 0, cap = 0;
-    cellref *ref = NULL;
+    grid G;
+    int ok = 0;
+    grid_init(&G, S);
     for (size_t c = 0; c < nps; c++)
     {
         const wm_pt a = r->pts[ps[c].a], p = r->pts[ps[c].i];
         const wm_pt b = r->pts[ps[c].b];
-        wm_pt lo = a, hi = a;
-        lo.x = p.x < lo.x ? p.x : lo.x;
-        lo.x = b.x < lo.x ? b.x : lo.x;
-        lo.y = p.y < lo.y ? p.y : lo.y;
-        lo.y = b.y < lo.y ? b.y : lo.y;
-        hi.x = p.x > hi.x ? p.x : hi.x;
-        hi.x = b.x > hi.x ? b.x : hi.x;
-        hi.y = p.y > hi.y ? p.y : hi.y;
-        hi.y = b.y > hi.y ? b.y : hi.y;
-        if (!add_cells(&ref, &nref, &cap, lo, hi, c, 0))
-        {
-            free(ref);
-            return 0;
-        }
+        const wm_pt lo = {a.x < b.x ? a.x : b.x, a.y < b.y ? a.y : b.y};
+        const wm_pt hi = {a.x < b.x ? b.x : a.x, a.y < b.y ? b.y : a.y};
+        const wm_pt lo3 = {lo.x < p.x ? lo.x : p.x, lo.y < p.y ? lo.y : p.y};
+        const wm_pt hi3 = {hi.x > p.x ? hi.x : p.x, hi.y > p.y ? hi.y : p.y};
+        if (!grid_add(&G, lo3, hi3, (uint32_t)c))
+            goto cleanup;
     }
-    qsort(ref, nref, sizeof *ref, cmp_cellref);
+    if (wm_cells_index(&G.g) != WM_OK)
+        goto cleanup;
     for (size_t q = 0; q < r->npts; q++)
     {
         const wm_pt v = r->pts[q];
-        const uint64_t key = cell_key(v);
-        for (size_t k = first_in_cell(ref, nref, v);
-             k < nref && ref[k].cell == key; k++)
+        size_t k, e;
+        grid_at(&G, v, &k, &e);
+        for (; k < e; k++)
         {
-            pass *c = &ps[ref[k].c];
+            pass *c = &ps[G.g.item[k]];
             const wm_pt a = r->pts[c->a], p = r->pts[c->i], b = r->pts[c->b];
             if (c->ok && !wm_pt_eq(v, a) && !wm_pt_eq(v, p) &&
                 !wm_pt_eq(v, b) && in_triangle(a, p, b, v) &&
@@ -437,8 +431,10 @@ static int check_empty(const wm_rings *r, pass *ps, size_t nps)
                 c->ok = 0;
         }
     }
-    free(ref);
-    return 1;
+    ok = 1;
+cleanup:
+    wm_cells_free(&G.g);
+    return ok;
 }
 
 /* Step 4: of the candidates of each pinch (consecutive in ps[]) that
@@ -561,7 +557,7 @@ static int open_round(wm_rings *r, int32_t S, size_t *nchanged)
     int ok = 0;
     *nchanged = 0;
     if (!find_repeats(r, &t, &in, &nin, &rep, &nrep) ||
-        !find_tees(r, in, nin, &tees, &ntee))
+        !find_tees(r, S, in, nin, &tees, &ntee))
         goto cleanup;
     if ((nrep || ntee) && (!(R.seen = calloc(r->npts, 1)) ||
                            !all_candidates(&R, &t, rep, nrep, tees, ntee)))
@@ -571,7 +567,7 @@ static int open_round(wm_rings *r, int32_t S, size_t *nchanged)
         left = malloc(r->nrings * sizeof *left);
         mark = calloc(r->npts, 1);
         gone = malloc(R.nps * sizeof *gone);
-        if (!left || !mark || !gone || !check_empty(r, R.ps, R.nps))
+        if (!left || !mark || !gone || !check_empty(r, S, R.ps, R.nps))
             goto cleanup;
         for (size_t ri = 0; ri < r->nrings; ri++)
             left[ri] = wm_rings_len(r, ri);
