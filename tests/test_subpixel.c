@@ -470,6 +470,68 @@ static void thin_streams_between_rows(void)
     wm_scene_free(&s);
 }
 
+/* Edges the exact search listed in block (0, 0) of s. */
+static size_t listed_edges(const wm_scene *s)
+{
+    wm_field f;
+    wm_probe p;
+    wm_hidden h;
+    size_t n = (size_t)-1;
+    if (wm_field_compute(s, 0, 0, s->n + 1, s->n + 1, NULL, &f, NULL) != WM_OK)
+        return n;
+    if (wm_probe_init(&p, s, 0, 0) == WM_OK &&
+        wm_hidden_find(&f, &p, &h, NULL) == WM_OK)
+    {
+        n = h.nedge;
+        wm_hidden_free(&h);
+    }
+    wm_probe_free(&p);
+    wm_field_free(&f);
+    return n;
+}
+
+/* An island 0.1 px high in a lake, 0.3 px above the sample row y = 40,
+ * the shore 0.5 px above it: the edges up from the row (water, 0.3 px
+ * from the island) to the shore's land (0.5 px) hold three crossings, the
+ * island's two sides and the shore, where marching squares draws one; the
+ * values sum past the loose bound and no river is near. The lake's edges
+ * meet those edges at two places (lake_twice): searched, the island kept
+ * (joined to the shore before, 9878593). A twin of the lake meets every
+ * edge where the lake does and adds no search. */
+static void island_near_shore(void)
+{
+    wm_scene s;
+    wm_rings r = {0};
+    const double lake[] = {2,    10,   60,   10,   60,   40.5, 2,    40.5,
+                           10.3, 40.3, 30.7, 40.3, 30.7, 40.4, 10.3, 40.4};
+    const int counts[] = {4, 4};
+    su_init(&s, 64);
+    su_lake(&s, lake, counts, 2);
+    su_finish(&s);
+    TAP_EQ(extract(&s, 1, &r), WM_OK, "the lake's block extracts");
+    TAP_EQ(count_sign(&r, 1), 1, "one water ring");
+    TAP_EQ(count_sign(&r, 0), 1, "the island kept");
+    TAP_OK(vertex_near(&r, 20 * WM_Q, 40.3 * WM_Q, 1.0) &&
+               vertex_near(&r, 20 * WM_Q, 40.4 * WM_Q, 1.0),
+           "both its sides exactly on the sample column x = 20");
+    TAP_EQ(ring_meetings(&r), 0, "rings simple and disjoint");
+    wm_rings_free(&r);
+    wm_scene_free(&s);
+
+    const double shore[] = {2, 10, 60, 10, 60, 40.5, 2, 40.5};
+    su_init(&s, 64);
+    su_lake(&s, shore, counts, 1);
+    su_finish(&s);
+    const size_t one = listed_edges(&s);
+    wm_scene_free(&s);
+    su_init(&s, 64);
+    su_lake(&s, shore, counts, 1);
+    su_lake(&s, shore, counts, 1);
+    su_finish(&s);
+    TAP_EQ(listed_edges(&s), one, "a twin lake adds no search (%zu)", one);
+    wm_scene_free(&s);
+}
+
 static int count_segment(void *user, wm_pt a, wm_pt b)
 {
     (void)a;
@@ -905,6 +967,7 @@ int main(void)
     dense_bend();
     buried_crossings();
     thin_streams_between_rows();
+    island_near_shore();
     hidden_cells_cancel();
     return TAP_DONE();
 }

@@ -22,8 +22,9 @@
  * LOOSE pixel from the interpolated crossing, or when a river capsule may
  * cross it twice inside its feasible part (river_may_hide: two streams or
  * a stream and an island narrower than a pixel between the two samples,
- * three crossings where marching squares draws one). An edge of land that
- * cannot decide is searched only when a capsule may cross it twice
+ * three crossings where marching squares draws one), or lake edges meet it
+ * at two places (lake_twice: an island near a lake's shore). An edge of land
+ * that cannot decide is searched only when a capsule may cross it twice
  * (capsule_may_cross: the squared distance to the capsule's axis along the
  * edge, less t^2, is concave). A saddle cell cannot decide
  * which diagonal the boundary separates. Their crossings are computed
@@ -41,19 +42,17 @@
  *
  * Why nothing is missed: a boundary component that meets an edge of the
  * sample grid either changes the class between its samples (marching
- * squares sees it) or crosses it an even number of times between samples
- * of one class, where the balls leave a feasible part, so the edge is
- * searched exactly. A component that meets no edge lies inside one cell;
- * seeds reach it: a point of each input smaller than two pixels, the tip
- * of each river cap narrower than 1.5 pixels, the corners of the union
- * (two input boundaries crossing, corners.c) off their cell's segment, and
- * those of a cell holding two or more (crowded_cells); a point on a cell's
- * side is in both cells (cells_holding), since the boundary may turn at it
- * in either. What stays unseen:
- * three crossings that a lake makes on an edge whose samples differ that
- * is not loose (a lake, or land inside one, narrower than the edge's
- * feasible part), and a feature narrower than the lattice's rounding
- * (block.c drops rings thinner than half a unit, 2A/P).
+ * squares sees it; three crossings or more there mean an input crossing
+ * it twice, river_may_hide and lake_twice) or crosses it an even number
+ * of times between samples of one class, where the balls leave a feasible
+ * part, so the edge is searched exactly. A component that meets no edge lies
+ * inside one cell; seeds reach it: a point of each input smaller than two
+ * pixels, the tip of each river cap narrower than 1.5 pixels, the corners of
+ * the union (two input boundaries crossing, corners.c) off their cell's
+ * segment, and those of a cell holding two or more (crowded_cells); a point on
+ * a cell's side is in both cells (cells_holding), since the boundary may turn
+ * at it in either. What stays unseen: a feature narrower than the lattice's
+ * rounding (block.c drops rings thinner than half a unit, 2A/P).
  *
  * Seams: an edge's crossings depend on the inputs only, with every
  * coordinate difference formed in integers, so both blocks sharing an edge
@@ -62,7 +61,8 @@
  * inside cells, which belong to one block.
  *
  * Cost: the field's water and near bits per row of a mixed tile, a few
- * float operations per edge both of whose samples are near; one exact
+ * float operations per edge both of whose samples are near, a walk along
+ * each lake edge over the sample lines it crosses; one exact
  * search (the items near the edge) per edge that cannot decide (and, on
  * land, that a capsule may cross) or is loose; subdivision only in
  * ambiguous cells, O(depth) searches per crossing.
@@ -851,6 +851,205 @@ static int link_cells(wm_hidden *h, const wm_field *f)
     return 1;
 }
 
+/* ---- the sample edges two lake edges meet ------------------------------ */
+
+/* Three crossings hide on an edge whose samples differ only where one item
+ * holds water between two of them (see river_may_hide): for a lake, a
+ * polygon whose edges meet the sample edge at two places. Those sample
+ * edges are found from the lake edges, by a walk along each over the
+ * sample lines it crosses (work that grows with shoreline), and searched
+ * exactly. */
+
+/* The sample edges met by lake edges, by the mixed tile that screens them
+ * (screen_tile: a tile's top row and right column but the block's are its
+ * neighbours'): per tile of the block its slot (0: none yet), per slot the
+ * rows of edges along x and y met once (seen) and twice or more (twice).
+ * A lake edge repeated (a lake's twin, an edge two lakes share) meets them
+ * where it did and is walked once (lake_segs). */
+typedef struct
+{
+    uint64_t seen[2][WM_TILE + 1], twice[2][WM_TILE + 1];
+} lake_slot;
+
+typedef struct
+{
+    const wm_field *f;
+    uint32_t *slot;
+    lake_slot *s;
+    size_t nslot, cap;
+} lake_meets;
+
+/* Notes that a lake edge meets sample edge (c, r) along x or y, `times`
+ * times. */
+static int lake_meet(lake_meets *m, int32_t c, int32_t r, int vertical,
+                     int times)
+{
+    const wm_field *f = m->f;
+    const int32_t n = f->w - 1;
+    const int32_t tx = (c < n ? c : n - 1) / WM_TILE;
+    const int32_t ty = (r < n ? r : n - 1) / WM_TILE;
+    const size_t t = (size_t)ty * (size_t)f->ntx + (size_t)tx;
+    if (f->kind[t] != WM_TILE_MIXED)
+        return 1; /* no sample edge there has samples of two classes */
+    if (!m->slot[t])
+    {
+        if (!wm_grow((void **)&m->s, &m->cap, m->nslot + 1, sizeof *m->s))
+            return 0;
+        memset(&m->s[m->nslot], 0, sizeof *m->s);
+        m->slot[t] = (uint32_t)++m->nslot;
+    }
+    lake_slot *s = &m->s[m->slot[t] - 1];
+    const int32_t row = r - ty * WM_TILE;
+    const uint64_t bit = UINT64_C(1) << (c - tx * WM_TILE);
+    if (times > 1 || s->seen[vertical][row] & bit)
+        s->twice[vertical][row] |= bit;
+    s->seen[vertical][row] |= bit;
+    return 1;
+}
+
+/* The sample edges of the lines u = k Q (k in 0..n) that the block-local
+ * lake edge (au, as) -> (bu, bs), whose box meets the block, crosses (u
+ * across the lines, s along them), by the field's half-open rule (a vertex
+ * on a line counts for the edge above it): the sample edge holding the
+ * crossing, and its neighbour too within 1/1000 unit of a sample (a
+ * screen: the search is exact). A lake edge lying along a line meets its
+ * sample edges twice. */
+static int lake_edge_lines(lake_meets *m, int64_t au, int64_t as, int64_t bu,
+                           int64_t bs, int vertical)
+{
+    const int32_t n = m->f->w - 1;
+    const int64_t hi = (int64_t)n * WM_Q;
+    if (au == bu)
+    {
+        if (au % WM_Q != 0)
+            return 1;
+        const int64_t s0 = as < bs ? as : bs, s1 = as < bs ? bs : as;
+        const int32_t k = (int32_t)(au / WM_Q);
+        const int32_t j0 = s0 <= 0 ? 0 : (int32_t)((s0 - 1) / WM_Q);
+        const int32_t j1 = s1 >= hi ? n - 1 : (int32_t)(s1 / WM_Q);
+        for (int32_t j = j0; j <= j1; j++)
+            if (!(vertical ? lake_meet(m, k, j, 1, 2)
+                           : lake_meet(m, j, k, 0, 2)))
+                return 0;
+        return 1;
+    }
+    const int64_t u0 = au < bu ? au : bu, u1 = au < bu ? bu : au;
+    if (u1 <= 0)
+        return 1;
+    const int64_t k0 = u0 <= 0 ? 0 : (u0 + WM_Q - 1) / WM_Q; /* k Q >= u0 */
+    const int64_t k1 = u1 > hi ? n : (u1 - 1) / WM_Q;        /* k Q < u1 */
+    const double slope = (double)(bs - as) / (double)(bu - au);
+    for (int64_t k = k0; k <= k1; k++)
+    {
+        const double s = (double)as + (double)(k * WM_Q - au) * slope;
+        const double lo = floor((s - 1e-3) / WM_Q);
+        const double up = floor((s + 1e-3) / WM_Q);
+        if (up < 0 || lo >= n)
+            continue;
+        for (int32_t j = lo < 0 ? 0 : (int32_t)lo; j <= (int32_t)up && j < n;
+             j++)
+            if (!(vertical ? lake_meet(m, (int32_t)k, j, 1, 1)
+                           : lake_meet(m, j, (int32_t)k, 0, 1)))
+                return 0;
+    }
+    return 1;
+}
+
+/* A lake edge meeting the block, block-local, its ends in lexicographic
+ * order (so that an edge repeated either way round compares equal). */
+typedef struct
+{
+    int64_t x0, y0, x1, y1;
+} lake_seg;
+
+static int cmp_lake_seg(const void *a, const void *b)
+{
+    const lake_seg *p = a, *q = b;
+    const int64_t d[4] = {p->x0 - q->x0, p->y0 - q->y0, p->x1 - q->x1,
+                          p->y1 - q->y1};
+    for (int i = 0; i < 4; i++)
+        if (d[i])
+            return d[i] < 0 ? -1 : 1;
+    return 0;
+}
+
+/* The lake edges in reach that meet the block's square, distinct, in *out
+ * (*n of them). Returns 0 when out of memory. */
+static int lake_segs(const wm_field *f, const wm_probe *probe, lake_seg **out,
+                     size_t *n)
+{
+    const wm_scene *s = probe->s;
+    const int64_t hi = (int64_t)(f->w - 1) * WM_Q;
+    lake_seg *g = NULL;
+    size_t k = 0, cap = 0;
+    for (size_t i = 0; i < probe->npolys; i++)
+    {
+        const uint32_t p = probe->polys[i];
+        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
+        {
+            const wm_lake_edge *l = &s->edges[e];
+            const int64_t ax = l->ax - probe->X0, ay = l->ay - probe->Y0;
+            const int64_t bx = l->bx - probe->X0, by = l->by - probe->Y0;
+            if ((ax < 0 && bx < 0) || (ay < 0 && by < 0) ||
+                (ax > hi && bx > hi) || (ay > hi && by > hi))
+                continue;
+            if (!wm_grow((void **)&g, &cap, k + 1, sizeof *g))
+            {
+                free(g);
+                return 0;
+            }
+            const int swap = ax > bx || (ax == bx && ay > by);
+            g[k++] =
+                swap ? (lake_seg){bx, by, ax, ay} : (lake_seg){ax, ay, bx, by};
+        }
+    }
+    if (k > 1)
+        qsort(g, k, sizeof *g, cmp_lake_seg);
+    size_t m = k ? 1 : 0;
+    for (size_t i = 1; i < k; i++)
+        if (cmp_lake_seg(&g[i], &g[m - 1]) != 0)
+            g[m++] = g[i];
+    *out = g;
+    *n = m;
+    return 1;
+}
+
+/* Fills m with the sample edges of the block's mixed tiles that the lake
+ * edges in reach meet, each edge once. Returns 0 when out of memory. */
+static int lake_twice(lake_meets *m, const wm_field *f, const wm_probe *probe)
+{
+    memset(m, 0, sizeof *m);
+    m->f = f;
+    if (probe->npolys == 0)
+        return 1;
+    lake_seg *g;
+    size_t n;
+    m->slot = calloc((size_t)f->ntx * (size_t)f->nty, sizeof *m->slot);
+    if (!m->slot || !lake_segs(f, probe, &g, &n))
+        return 0;
+    int ok = 1;
+    for (size_t i = 0; ok && i < n; i++)
+        ok = lake_edge_lines(m, g[i].y0, g[i].x0, g[i].y1, g[i].x1, 0) &&
+             lake_edge_lines(m, g[i].x0, g[i].y0, g[i].x1, g[i].y1, 1);
+    free(g);
+    return ok;
+}
+
+static void lake_meets_free(lake_meets *m)
+{
+    free(m->slot);
+    free(m->s);
+}
+
+/* Tile t's rows of sample edges along x and y that lake edges meet twice,
+ * or NULL. */
+static const uint64_t (*tile_twice(const lake_meets *m, size_t t))[WM_TILE + 1]
+{
+    return m->slot && m->slot[t]
+               ? (const uint64_t(*)[WM_TILE + 1]) m->s[m->slot[t] - 1].twice
+               : NULL;
+}
+
 /* A mixed tile being screened: its values, first cell and end (exclusive,
  * clamped to the block's n cells). */
 typedef struct
@@ -862,6 +1061,8 @@ typedef struct
                     not yet) */
     double rriv; /* least river capsule radius in reach, pixels (< 0: not
                     yet) */
+    const uint64_t (*twice)[WM_TILE + 1]; /* per row, the edges along x and
+                    y that lake edges meet twice (lake_twice), or NULL */
 } tile;
 
 /* Edge from sample (c0 + q, r) of T along x or y. */
@@ -925,12 +1126,14 @@ static int river_may_hide(const wm_probe *probe, tile *T, const edge_view *e)
 /* Screens the edges of row r of T at the columns set in m (both samples
  * near): along x or y, whose samples are of one class (kind 0: searched
  * when they cannot decide, and for land when a capsule may cross them) or
- * differ (kind 1: searched when loose, and always on the block square, so
- * that the two blocks sharing it take the same crossing). The sum of the
- * two values rules most out before the feet beside are read. */
+ * differ (kind 1: searched when loose, when a river may cross it twice or
+ * lake edges meet it twice, and always on the block square, so that the
+ * two blocks sharing it take the same crossing). The sum of the two values
+ * rules most out before the feet beside are read. */
 static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe, tile *T,
                   int32_t r, uint64_t m, int vertical, int kind)
 {
+    const uint64_t twice = T->twice ? T->twice[vertical][r - T->r0] : 0;
     const float *row = T->v + (ptrdiff_t)(r - T->r0) * (WM_TILE + 1);
     const ptrdiff_t along = vertical ? WM_TILE + 1 : 1;
     while (m)
@@ -952,7 +1155,7 @@ static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe, tile *T,
         }
         const int sq = vertical ? c == 0 || c == T->n : r == 0 || r == T->n;
         const edge_view e = view_of(T, q, r, vertical);
-        if (!sq && !(sum < 1.0f - LOOSE && loose(&e)) &&
+        if (!sq && !(twice >> q & 1) && !(sum < 1.0f - LOOSE && loose(&e)) &&
             !river_may_hide(probe, T, &e))
             continue;
         if (!loose_edge(h, f, probe, c, r, vertical))
@@ -1007,6 +1210,12 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
 {
     const int32_t n = f->w - 1;
     memset(h, 0, sizeof *h);
+    lake_meets lm;
+    if (!lake_twice(&lm, f, probe))
+    {
+        lake_meets_free(&lm);
+        goto nomem;
+    }
     for (size_t k = 0; k < f->mixed; k++)
     {
         const size_t t = f->mixed_tile[k];
@@ -1020,16 +1229,22 @@ wm_status wm_hidden_find(const wm_field *f, wm_probe *probe, wm_hidden *h,
                   r0 + WM_TILE < n ? r0 + WM_TILE : n,
                   n,
                   -1,
-                  -1};
+                  -1,
+                  tile_twice(&lm, t)};
         if (wm_cancelled(ctx))
         {
+            lake_meets_free(&lm);
             wm_hidden_free(h);
             return wm_fail(ctx, WM_ERR_CANCELLED, "cancelled");
         }
         wm_field_prefetch_tile(f, k + 1);
         if (!screen_tile(h, f, probe, &T))
+        {
+            lake_meets_free(&lm);
             goto nomem;
+        }
     }
+    lake_meets_free(&lm);
     const wm_status st = wm_corners_find(probe, f, ctx);
     if (st != WM_OK)
     {
