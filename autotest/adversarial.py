@@ -109,7 +109,8 @@ EPSG = scenes.SCENE_EPSG  # 32631
 ORIGIN = (400000.0, 4699968.0)
 
 BASE_FAMILIES = ('wedge', 'parallel', 'island', 'subpixel')
-FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic', 'twins', 'spike', 'cluster')
+FAMILIES = BASE_FAMILIES + ('seam', 'shore', 'grid', 'mosaic', 'twins', 'spike', 'cluster',
+                            'shoal')
 
 
 # ----------------------------------------------------------------------------
@@ -555,6 +556,44 @@ def _spike(rng, px):
     return rivers, lakes, meta
 
 
+def _shoal(rng, px):
+    """Thin features along the sample grid: a lake with one to three
+    islands 0.03-0.4 px wide, 3-18 px long, 0.05-0.6 px from its straight
+    shore and from each other, or a stack of two to four lakes 0.03-0.5 px
+    wide 0.02-0.5 px apart, or both; along a sample row (the anchor is a
+    sample) or at up to 3 degrees to it. The edges from the last samples
+    of water to the shore's land hold three crossings where marching
+    squares draws one (subpixel.c's lake_twice)."""
+    kind = rng.choice(('islands', 'stack', 'both'))
+    y0 = rng.choice((0.0, 0.0, 0.5, rng.random())) * px
+    ang = rng.choice((0.0, 0.0, rng.uniform(-0.5, 0.5), rng.uniform(-3.0, 3.0)))
+    lakes = []
+    y = y0 - rng.uniform(0.0, 0.3) * px  # where a stack begins
+    if kind in ('islands', 'both'):
+        shore = y0 + rng.uniform(0.3, 1.0) * px
+        shell = list(box(-20.0 * px, shore - 20.0 * px, 20.0 * px, shore).exterior.coords)
+        holes, yi, x = [], shore - rng.uniform(0.05, 0.6) * px, -17.0 * px
+        for _ in range(rng.randint(1, 3)):
+            w, ln = rng.uniform(0.03, 0.4) * px, rng.uniform(3.0, 10.0) * px
+            holes.append(list(box(x, yi - w, x + ln, yi).exterior.coords)[::-1])
+            yi -= w + rng.uniform(0.03, 0.6) * px
+            x += ln + rng.uniform(0.5, 2.0) * px
+        lakes.append((shell, holes))
+        y = shore + rng.uniform(0.02, 0.5) * px
+    if kind in ('stack', 'both'):
+        for _ in range(rng.randint(2, 4)):
+            w = rng.uniform(0.03, 0.5) * px
+            x0, x1 = rng.uniform(-12.0, -9.0) * px, rng.uniform(9.0, 15.0) * px
+            lakes.append((list(box(x0, y, x1, y + w).exterior.coords), []))
+            y += w + rng.uniform(0.02, 0.5) * px
+    a = math.radians(ang)
+    lakes = [([_rot(p, a) for p in s], [[_rot(p, a) for p in h] for h in hs])
+             for s, hs in lakes]
+    meta = dict(kind=kind, angle_deg=ang, row_offset_px=y0 / px, on_samples=True,
+                scale=px)
+    return [], lakes, meta
+
+
 def _cluster(rng, px):
     """2-6 short rivers and 0-3 small lakes at random within a square of
     1, 2 or 4 px."""
@@ -579,7 +618,8 @@ def _cluster(rng, px):
 
 _GENERATORS = {'wedge': _wedge, 'parallel': _parallel, 'island': _island,
                'subpixel': _subpixel, 'shore': _shore, 'mosaic': _mosaic,
-               'twins': _twins, 'spike': _spike, 'cluster': _cluster}
+               'twins': _twins, 'spike': _spike, 'cluster': _cluster,
+               'shoal': _shoal}
 
 
 # ----------------------------------------------------------------------------

@@ -247,6 +247,15 @@ def test_generator_feature(scene):
         # inputs scattered in a square of 1, 2 or 4 px around the anchor
         assert m['span_px'] in (1.0, 2.0, 4.0), scene.describe
         assert w.distance(a) <= m['span_px'] * px, 'no water near the cluster: %s' % scene.describe
+    elif sub == 'shoal':
+        # on a sample; thin islands in a lake near the anchor, a stack of
+        # thin lakes apart from each other, or both
+        assert all(abs(c / px - round(c / px)) < 1e-9 for c in m['anchor']), scene.describe
+        near = [p for p in oracle.polygons_of(w) if p.distance(a) <= 4 * px]
+        if m['kind'] != 'stack':
+            assert any(p.interiors for p in near), 'no island: %s' % scene.describe
+        if m['kind'] != 'islands':
+            assert len(near) >= 2, 'the stack joined: %s' % scene.describe
     else:  # subpixel
         assert 0.1 - 1e-9 <= m['width_px'] <= 0.8 + 1e-9
         assert any(max(p.bounds[2] - p.bounds[0], p.bounds[3] - p.bounds[1]) <= 1.3 * px

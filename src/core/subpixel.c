@@ -910,7 +910,7 @@ static int lake_meet(lake_meets *m, int32_t c, int32_t r, int vertical,
 /* The sample edges of the lines u = k Q (k in 0..n) that the block-local
  * lake edge (au, as) -> (bu, bs), whose box meets the block, crosses (u
  * across the lines, s along them), by the field's half-open rule (a vertex
- * on a line counts for the edge above it): the sample edge holding the
+ * on a line counts for the edge beyond it): the sample edge holding the
  * crossing, and its neighbour too within 1/1000 unit of a sample (a
  * screen: the search is exact). A lake edge lying along a line meets its
  * sample edges twice. */
