@@ -58,6 +58,10 @@ interest" whose exact shape the lattice cannot resolve by sampling alone:
             islands, wedges and near misses in a few cells at once; two
             times in five on a block side or corner (placed as the seam
             family's).
+  shoal     thin features along the sample grid: a lake with 1-3 islands
+            0.03-0.4 px wide 0.05-0.6 px from its straight shore and each
+            other, a stack of 2-4 lakes 0.03-0.5 px wide 0.02-0.5 px
+            apart, or both; along a sample row or at up to 3 degrees.
   seam      one of the four above with its feature of interest moved onto a
             block side (or, one time in five, a block corner): exactly on it
             one time in four, else within +-0.4 of the feature's size (at
