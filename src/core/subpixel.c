@@ -855,10 +855,13 @@ static int link_cells(wm_hidden *h, const wm_field *f)
 
 /* Three crossings hide on an edge whose samples differ only where one item
  * holds water between two of them (see river_may_hide): for a lake, a
- * polygon whose edges meet the sample edge at two places. Those sample
- * edges are found from the lake edges, by a walk along each over the
- * sample lines it crosses (work that grows with shoreline), and searched
- * exactly. */
+ * polygon holding a stretch of the sample edge between two of its own
+ * crossings. Its edges then cross the sample edge twice, counted by the
+ * field's half-open rule (as on the sample line moved up or right by an
+ * infinitesimal: a vertex touching the line from below adds water at one
+ * point only), or one lies along it. Those sample edges are found from the
+ * lake edges, by a walk along each over the sample lines it crosses (work
+ * that grows with shoreline), and searched exactly. */
 
 /* The sample edges met by lake edges, by the mixed tile that screens them
  * (screen_tile: a tile's top row and right column but the block's are its
@@ -908,12 +911,13 @@ static int lake_meet(lake_meets *m, int32_t c, int32_t r, int vertical,
 }
 
 /* The sample edges of the lines u = k Q (k in 0..n) that the block-local
- * lake edge (au, as) -> (bu, bs), whose box meets the block, crosses (u
- * across the lines, s along them), by the field's half-open rule (a vertex
- * on a line counts for the edge beyond it): the sample edge holding the
- * crossing, and its neighbour too within 1/1000 unit of a sample (a
- * screen: the search is exact). A lake edge lying along a line meets its
- * sample edges twice. */
+ * lake edge (au, as) -> (bu, bs), whose box meets the block (so a line it
+ * lies along is one of them), crosses (u across the lines, s along them),
+ * by the field's half-open rule (a vertex on a line counts for the edge
+ * beyond it): the sample edge holding the crossing, and its neighbour too
+ * within the rounding of the crossing's position and 1/1000 unit of a
+ * sample (a screen: the search is exact). A lake edge lying along a line
+ * meets the sample edges it overlaps twice. */
 static int lake_edge_lines(lake_meets *m, int64_t au, int64_t as, int64_t bu,
                            int64_t bs, int vertical)
 {
@@ -924,9 +928,11 @@ static int lake_edge_lines(lake_meets *m, int64_t au, int64_t as, int64_t bu,
         if (au % WM_Q != 0)
             return 1;
         const int64_t s0 = as < bs ? as : bs, s1 = as < bs ? bs : as;
+        if (s1 <= 0 || s0 >= hi)
+            return 1; /* at a block corner */
         const int32_t k = (int32_t)(au / WM_Q);
-        const int32_t j0 = s0 <= 0 ? 0 : (int32_t)((s0 - 1) / WM_Q);
-        const int32_t j1 = s1 >= hi ? n - 1 : (int32_t)(s1 / WM_Q);
+        const int32_t j0 = s0 <= 0 ? 0 : (int32_t)(s0 / WM_Q);
+        const int32_t j1 = s1 >= hi ? n - 1 : (int32_t)((s1 - 1) / WM_Q);
         for (int32_t j = j0; j <= j1; j++)
             if (!(vertical ? lake_meet(m, k, j, 1, 2)
                            : lake_meet(m, j, k, 0, 2)))
@@ -942,8 +948,9 @@ static int lake_edge_lines(lake_meets *m, int64_t au, int64_t as, int64_t bu,
     for (int64_t k = k0; k <= k1; k++)
     {
         const double s = (double)as + (double)(k * WM_Q - au) * slope;
-        const double lo = floor((s - 1e-3) / WM_Q);
-        const double up = floor((s + 1e-3) / WM_Q);
+        const double e = 1e-3 + 1e-14 * (fabs((double)as) + fabs(s));
+        const double lo = floor((s - e) / WM_Q);
+        const double up = floor((s + e) / WM_Q);
         if (up < 0 || lo >= n)
             continue;
         for (int32_t j = lo < 0 ? 0 : (int32_t)lo; j <= (int32_t)up && j < n;
@@ -1020,7 +1027,7 @@ static int lake_twice(lake_meets *m, const wm_field *f, const wm_probe *probe)
 {
     memset(m, 0, sizeof *m);
     m->f = f;
-    if (probe->npolys == 0)
+    if (probe->npolys == 0 || f->mixed == 0)
         return 1;
     lake_seg *g;
     size_t n;
