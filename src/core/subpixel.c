@@ -22,8 +22,8 @@
  * LOOSE pixel from the interpolated crossing, or when a river capsule may
  * cross it twice inside its feasible part (river_may_hide: two streams or
  * a stream and an island narrower than a pixel between the two samples,
- * three crossings where marching squares draws one), or lake edges meet it
- * at two places (lake_twice: an island near a lake's shore). An edge of land
+ * three crossings where marching squares draws one), or lake edges cross
+ * it twice (lake_twice: an island near a lake's shore). An edge of land
  * that cannot decide is searched only when a capsule may cross it twice
  * (capsule_may_cross: the squared distance to the capsule's axis along the
  * edge, less t^2, is concave). A saddle cell cannot decide
@@ -851,7 +851,7 @@ static int link_cells(wm_hidden *h, const wm_field *f)
     return 1;
 }
 
-/* ---- the sample edges two lake edges meet ------------------------------ */
+/* ---- the sample edges lake edges cross twice --------------------------- */
 
 /* Three crossings hide on an edge whose samples differ only where one item
  * holds water between two of them (see river_may_hide): for a lake, a
@@ -1048,7 +1048,7 @@ static void lake_meets_free(lake_meets *m)
     free(m->s);
 }
 
-/* Tile t's rows of sample edges along x and y that lake edges meet twice,
+/* Tile t's rows of sample edges along x and y that lake edges cross twice,
  * or NULL. */
 static const uint64_t (*tile_twice(const lake_meets *m, size_t t))[WM_TILE + 1]
 {
@@ -1069,7 +1069,7 @@ typedef struct
     double rriv; /* least river capsule radius in reach, pixels (< 0: not
                     yet) */
     const uint64_t (*twice)[WM_TILE + 1]; /* per row, the edges along x and
-                    y that lake edges meet twice (lake_twice), or NULL */
+                    y that lake edges cross twice (lake_twice), or NULL */
 } tile;
 
 /* Edge from sample (c0 + q, r) of T along x or y. */
@@ -1134,7 +1134,7 @@ static int river_may_hide(const wm_probe *probe, tile *T, const edge_view *e)
  * near): along x or y, whose samples are of one class (kind 0: searched
  * when they cannot decide, and for land when a capsule may cross them) or
  * differ (kind 1: searched when loose, when a river may cross it twice or
- * lake edges meet it twice, and always on the block square, so that the
+ * lake edges cross it twice, and always on the block square, so that the
  * two blocks sharing it take the same crossing). The sum of the two values
  * rules most out before the feet beside are read. */
 static int screen(wm_hidden *h, const wm_field *f, wm_probe *probe, tile *T,
