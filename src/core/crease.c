@@ -90,24 +90,31 @@ static int cmp_ins(const void *a, const void *b)
 /* How many scattered field reads ahead a loop prefetches. */
 #define PREFETCH 8
 
-/* Whether a point within an eighth of a pixel of (x, y), in one of eight
- * directions, is of class `land` (1) or water (0): the new edges a - c and
- * c - b are chords of the union's boundary, which may bulge across them
- * (the round caps of two rivers ending side by side leave a notch whose
- * sides bulge into the triangle: a median point 0.01 pixel inside a cap,
- * seam seed 146366 at 0.9 m, left the notch's tip 0.54 pixel off), while a
- * spike along an edge two inputs share lies inside the union far from
- * either class's other side. */
+/* Whether a point of the block within an eighth of a pixel of (x, y), in
+ * one of eight directions, is of class `land` (1) or water (0): the new
+ * edges a - c and c - b are chords of the union's boundary, which may bulge
+ * across them (the round caps of two rivers ending side by side leave a
+ * notch whose sides bulge into the triangle: a median point 0.01 pixel
+ * inside a cap, seam seed 146366 at 0.9 m, left the notch's tip 0.54 pixel
+ * off), while a spike along an edge two inputs share lies inside the union
+ * far from either class's other side. Only points of the block count: its
+ * rings hold its own square, and water just across a block side is the
+ * next block's (a lake's edge on the side, a corner of it on the side 11
+ * pixels from a stream leaving the lake: a spike along the side a unit
+ * wide, held-out round 30). */
 static int class_near(wm_probe *in, double x, double y, int land)
 {
     const double d = WM_Q / 8.0, h = d * 0.70710678118654752;
+    const double S = (double)in->s->n * WM_Q;
     static const double dir[8][2] = {{1, 0}, {0, 1},  {-1, 0},  {0, -1},
                                      {1, 1}, {-1, 1}, {-1, -1}, {1, -1}};
     for (int k = 0; k < 8; k++)
     {
         const double s = k < 4 ? d : h;
-        if ((wm_probe_distance(in, x + s * dir[k][0], y + s * dir[k][1],
-                               4.0 * WM_Q) > 0) == land)
+        const double px = x + s * dir[k][0], py = y + s * dir[k][1];
+        if (px < 0 || py < 0 || px > S || py > S)
+            continue;
+        if ((wm_probe_distance(in, px, py, 4.0 * WM_Q) > 0) == land)
             return 1;
     }
     return 0;
