@@ -368,6 +368,10 @@ def test_hausdorff(scene):
     fig = scene.measure('exact')
     assert fig['hausdorff_px'] <= HAUSDORFF_PX, \
         '%s: Hausdorff %.3f px at %s' % (scene.describe, fig['hausdorff_px'], fig['worst_at'])
+    # and no vertex off its own block's exact boundary (a spike along a side)
+    assert fig['vertex_off_px'] <= HAUSDORFF_PX, \
+        '%s: a vertex %.3f px off its block\'s exact boundary' % (
+            scene.describe, fig['vertex_off_px'])
 
 
 # Scenes whose rings the output must match one for one (per block and
