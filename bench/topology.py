@@ -23,6 +23,10 @@ family:
   H p99        99th percentile of all the family's boundary sample
                distances (px), both directions pooled over its scenes
   >0.5px       scenes whose Hausdorff distance exceeds 0.5 px
+  vertex off   farthest output vertex from its own block's clipped exact
+               boundary (px), the block square counting only where the
+               exact water is cut by it (adversarial.vertex_offset: a spike
+               along a block side, which H counts as near the boundary)
   specks       output rings (outer / hole) whose vertices all lie within
                0.5 px of each other (max pairwise distance), touching a side
                of their block or not, and for which the oracle has no ring of
@@ -236,6 +240,7 @@ def family_row(family, recs, dists):
             '%.2f' % max([r['hausdorff_px'] for r in ok] or [0.0]),
             '%.3f' % (float(np.percentile(pooled, 99)) if len(pooled) else 0.0),
             str(sum(r['hausdorff_px'] > 0.5 for r in ok)),
+            '%.2f' % max([r['vertex_off_px'] for r in ok] or [0.0]),
             '%d (%d / %d)' % (so + sh, so, sh),
             '%d / %d (%d / %d)' % (lo + lh, smo + smh, lo, lh),
             str(sum(r['ring_diff'] for r in ok)),
@@ -249,7 +254,8 @@ def family_row(family, recs, dists):
                              sum(r.get('check_s', 0.0) for r in ok) / max(1, len(ok)))]
 
 
-HEADER = ['family', 'scenes', 'H max px', 'H p99 px', '>0.5px', 'specks (outer / hole)',
+HEADER = ['family', 'scenes', 'H max px', 'H p99 px', '>0.5px', 'vertex off px',
+          'specks (outer / hole)',
           'lost / small (lost outer / hole)', 'ring diff', 'pinched', 'symdiff m² (rel)', 'area max %',
           'invalid',
           'seams', 'errors', 's/scene run / check']
