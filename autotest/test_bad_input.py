@@ -445,6 +445,23 @@ def test_river_narrower_than_the_lattice_skipped(wm, tmp_dir, simple_scene):
     assert len(wm.read_output(out)['water']) == 0
 
 
+def test_lake_with_no_area_left_warned(wm, tmp_dir):
+    """A lake with an area in its own CRS that has none once reprojected
+    and rounded to the lattice (a cap around the North Pole in EPSG:4326,
+    drawn along the parallel 89.999 from -180 to 180: its vertices go to
+    two points in UPS North) is skipped with a warning naming the layer,
+    not silently (the output was empty without a word)."""
+    path = os.path.join(tmp_dir, 'polar.gpkg')
+    scenes.write_layer(path, 'lakes', ogr.wkbPolygon, 4326, [
+        {'geom': 'POLYGON ((-180 89.999, 180 89.999, 180 90, -180 90, -180 89.999))'}])
+    out = os.path.join(tmp_dir, 'o.gpkg')
+    p = wm.cli(['-lakes', path, '-lakes_layer', 'lakes', '-pixel_size', '0.5',
+                '-block_size', '64', out])
+    assert p.returncode == 0, p.stderr
+    assert "LAKES layer 'lakes': 1 lake(s) with an area have none" in p.stderr, p.stderr
+    assert len(wm.read_output(out)['water']) == 0
+
+
 @pytest.mark.parametrize('spike', ['middle', 'start', 'retraced'])
 def test_lake_spike_of_no_width(wm, tmp_dir, spike):
     """A lake ring that goes out along an edge and comes back (a, b, a), at

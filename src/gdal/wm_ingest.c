@@ -1146,6 +1146,7 @@ static int read_lakes(builder *b, OGRLayerH h, double unit,
         return FALSE;
     OGR_L_ResetReading(h);
     OGRFeatureH f;
+    size_t collapsed = 0; /* lakes with an area that kept no edge */
     while (ok && (f = OGR_L_GetNextFeature(h)) != NULL)
     {
         fc.fid = OGR_F_GetFID(f);
@@ -1156,12 +1157,21 @@ static int read_lakes(builder *b, OGRLayerH h, double unit,
             continue;
         }
         OGRGeometryH g = linear(g0);
+        const size_t before = b->nedges;
         ok = add_lake_geom(b, g, &fc, nvert, 0);
+        collapsed += ok && b->nedges == before && OGR_G_Area(g) > 0;
         OGR_G_DestroyGeometry(g);
         OGR_F_Destroy(f);
     }
     if (fc.ct)
         OCTDestroyCoordinateTransformation(fc.ct);
+    if (ok && collapsed)
+        CPLError(CE_Warning, CPLE_AppDefined,
+                 "WATERMESH: LAKES layer '%s': %lu lake(s) with an area have "
+                 "none once in the working CRS and on the lattice (PIXEL_SIZE "
+                 "/ 256): smaller than the lattice, or a cap around a pole "
+                 "drawn along a parallel; skipped.",
+                 OGR_L_GetName(h), (unsigned long)collapsed);
     return ok;
 }
 
