@@ -980,35 +980,26 @@ static int cmp_lake_seg(const void *a, const void *b)
     return 0;
 }
 
-/* The lake edges in reach that meet the block's square, distinct, in *out
- * (*n of them). Returns 0 when out of memory. */
+/* The block's lake edges (the probe's) that meet its square, distinct, in
+ * *out (*n of them). Returns 0 when out of memory. */
 static int lake_segs(const wm_field *f, const wm_probe *probe, lake_seg **out,
                      size_t *n)
 {
-    const wm_scene *s = probe->s;
     const int64_t hi = (int64_t)(f->w - 1) * WM_Q;
-    lake_seg *g = NULL;
-    size_t k = 0, cap = 0;
-    for (size_t i = 0; i < probe->npolys; i++)
+    lake_seg *g = malloc((probe->nledge + 1) * sizeof *g);
+    if (!g)
+        return 0;
+    size_t k = 0;
+    for (size_t i = 0; i < probe->nledge; i++)
     {
-        const uint32_t p = probe->polys[i];
-        for (size_t e = s->poly_start[p]; e < s->poly_start[p + 1]; e++)
-        {
-            const wm_lake_edge *l = &s->edges[e];
-            const int64_t ax = l->ax - probe->X0, ay = l->ay - probe->Y0;
-            const int64_t bx = l->bx - probe->X0, by = l->by - probe->Y0;
-            if ((ax < 0 && bx < 0) || (ay < 0 && by < 0) ||
-                (ax > hi && bx > hi) || (ay > hi && by > hi))
-                continue;
-            if (!wm_grow((void **)&g, &cap, k + 1, sizeof *g))
-            {
-                free(g);
-                return 0;
-            }
-            const int swap = ax > bx || (ax == bx && ay > by);
-            g[k++] =
-                swap ? (lake_seg){bx, by, ax, ay} : (lake_seg){ax, ay, bx, by};
-        }
+        const wm_lake_edge *l = &probe->s->edges[probe->ledge[i].e];
+        const int64_t ax = l->ax - probe->X0, ay = l->ay - probe->Y0;
+        const int64_t bx = l->bx - probe->X0, by = l->by - probe->Y0;
+        if ((ax < 0 && bx < 0) || (ay < 0 && by < 0) || (ax > hi && bx > hi) ||
+            (ay > hi && by > hi))
+            continue;
+        const int swap = ax > bx || (ax == bx && ay > by);
+        g[k++] = swap ? (lake_seg){bx, by, ax, ay} : (lake_seg){ax, ay, bx, by};
     }
     if (k > 1)
         qsort(g, k, sizeof *g, cmp_lake_seg);
@@ -1027,7 +1018,7 @@ static int lake_twice(lake_meets *m, const wm_field *f, const wm_probe *probe)
 {
     memset(m, 0, sizeof *m);
     m->f = f;
-    if (probe->npolys == 0 || f->mixed == 0)
+    if (probe->nledge == 0 || f->mixed == 0)
         return 1;
     lake_seg *g;
     size_t n;
