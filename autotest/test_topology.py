@@ -469,6 +469,13 @@ def test_osm_block(wm, case):
     assert fig['lost_outer'] == 0 and fig['lost_hole'] == 0, (case, fig['lost_at'])
 
 
+def _run_measured(wm, options, B, px):
+    """Runs options; (the run, the oracle by block, measure()'s figures)."""
+    orc = oracle.oracle_blocks(oracle.inputs_from_options(options), B)
+    res = wm.run(options)
+    return res, orc, adversarial.measure(res.water, orc, B, px)[0]
+
+
 def test_densified_arcs_keep_their_strip(wm, tmp_path):
     """Two concentric river arcs (radii about 40 m) with a vertex every
     0.08 pixel, on the lattice as adversarial.py snaps them, and a land
@@ -499,9 +506,7 @@ def test_densified_arcs_keep_their_strip(wm, tmp_path):
                        fields=[('width', 'Real')])
     options = {'RIVERS': path, 'RIVERS_LAYER': 'rivers', 'WIDTH_FIELD': 'width',
                'PIXEL_SIZE': px, 'BLOCK_SIZE': B, 'SIMPLIFY': 0, 'NUM_THREADS': 1}
-    orc = oracle.oracle_blocks(oracle.inputs_from_options(options), B)
-    res = wm.run(options)
-    fig, _ = adversarial.measure(res.water, orc, B, px)
+    res, orc, fig = _run_measured(wm, options, B, px)
     assert fig['ring_diff'] == 0, fig
     assert fig['hausdorff_px'] <= HAUSDORFF_PX, (fig['hausdorff_px'], fig['worst_at'])
     assert sum(len(oracle.polygons_of(g)) for g in orc.values()) == len(res.water)
@@ -541,9 +546,7 @@ def test_thin_island_along_sample_row_kept(wm, tmp_path, case):
     scenes.write_layer(path, 'lakes', ogr.wkbPolygon, adversarial.EPSG, [{'geom': lake}])
     options = {'LAKES': path, 'LAKES_LAYER': 'lakes', 'PIXEL_SIZE': px,
                'BLOCK_SIZE': B, 'SIMPLIFY': 0, 'NUM_THREADS': 1}
-    orc = oracle.oracle_blocks(oracle.inputs_from_options(options), B)
-    res = wm.run(options)
-    fig, _ = adversarial.measure(res.water, orc, B, px)
+    _, _, fig = _run_measured(wm, options, B, px)
     assert fig['ring_diff'] == 0, fig
     assert fig['lost_hole'] == 0, (fig['lost_hole'], fig['lost_at'])
     assert fig['hausdorff_px'] <= HAUSDORFF_PX, (fig['hausdorff_px'], fig['worst_at'])
@@ -572,9 +575,7 @@ def test_stream_leaving_lake_on_block_side(wm, tmp_path):
     options = {'LAKES': path, 'LAKES_LAYER': 'lakes', 'RIVERS': path, 'RIVERS_LAYER': 'rivers',
                'WIDTH_FIELD': 'width', 'PIXEL_SIZE': px, 'BLOCK_SIZE': B, 'SIMPLIFY': 0,
                'NUM_THREADS': 1}
-    orc = oracle.oracle_blocks(oracle.inputs_from_options(options), B)
-    res = wm.run(options)
-    fig, _ = adversarial.measure(res.water, orc, B, px)
+    res, orc, fig = _run_measured(wm, options, B, px)
     assert fig['hausdorff_px'] <= HAUSDORFF_PX, (fig['hausdorff_px'], fig['worst_at'])
     assert fig['ring_diff'] == 0, fig
     # measure() counts the block square as boundary, and the spikes lie a
